@@ -1,0 +1,140 @@
+#pragma once
+/// @file explicit.h
+/// Explicit central-difference time integration in velocity form for a
+/// lumped-mass system M a = f_ext - f_int(u) - c M v, with boundary
+/// conditions on dof sets. Works on plain arrays; no DOLFINx here, so the
+/// same integrator serves any model that provides a mass vector and an
+/// internal-force callback.
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace dembridge::shell
+{
+
+/// A scalar history of time: value(t) in SI units.
+using History = std::function<double(double)>;
+
+/// Internal-force callback: f = f_int(u). Spans of length num_dofs.
+using InternalForceFn
+    = std::function<void(std::span<const double> u, std::span<double> f)>;
+
+/// How a set of dofs is driven.
+enum class MotionKind
+{
+  fixed,        ///< u = 0, v = 0
+  velocity,     ///< v(t) = value(t) [m/s or rad/s]
+  displacement  ///< u(t) = value(t) [m or rad]
+};
+
+/// A kinematic boundary condition on a set of dofs (all get the same value).
+struct PrescribedMotion
+{
+  std::string name;
+  std::vector<std::int32_t> dofs;
+  MotionKind kind = MotionKind::fixed;
+  History value; ///< unused for `fixed`
+};
+
+/// External nodal forces f_d = weights[d] * value(t) on the listed dofs.
+struct NodalLoad
+{
+  std::string name;
+  std::vector<std::int32_t> dofs;
+  std::vector<double> weights; ///< [-] share of value(t) per dof
+  History value;               ///< [N] or [N m]
+};
+
+/// Energy budget [J]. With no numerical dissipation,
+/// kinetic + strain + damping = initial + external_work + prescribed_work.
+struct EnergyBudget
+{
+  double initial = 0.0;         ///< kinetic + strain at the start
+  double kinetic = 0.0;
+  double strain = 0.0;
+  double external_work = 0.0;   ///< work of NodalLoads
+  double prescribed_work = 0.0; ///< work of reactions on prescribed dofs
+  double damping = 0.0;         ///< dissipated by mass-proportional damping
+  /// Energy created (> 0) or lost (< 0) by the integration.
+  double imbalance() const
+  {
+    return kinetic + strain + damping - initial - external_work - prescribed_work;
+  }
+};
+
+/// Selects nodes whose coordinates satisfy `pred`.
+/// @param x node coordinates, shape (num_nodes, 3), row-major [m]
+/// @throws std::runtime_error naming `what` if no node is selected.
+std::vector<std::int32_t>
+select_nodes(std::span<const double> x,
+             const std::function<bool(const std::array<double, 3>&)>& pred,
+             const std::string& what);
+
+/// Dofs node * bs + c for each node and each component c in `components`.
+std::vector<std::int32_t> node_dofs(std::span<const std::int32_t> nodes, int bs,
+                                    std::span<const int> components);
+
+/// Largest eigenvalue of M^-1 K by power iteration on M^-1/2 K M^-1/2,
+/// K given by its action `f_int` (linear). Stops when the Rayleigh quotient
+/// changes by less than `rtol` or after `max_iter` iterations.
+/// Returns lambda_max [1/s^2]; the critical step is 2 / sqrt(lambda_max).
+double max_eigenvalue(std::span<const double> mass, const InternalForceFn& f_int,
+                      double rtol = 1e-6, int max_iter = 5000);
+
+/// Explicit integrator, velocity Verlet (= central differences):
+///   v(n+1/2) = v(n) + dt/2 a(n),  u(n+1) = u(n) + dt v(n+1/2),
+///   a(n+1) = M^-1 (f_ext(n+1) - f_int(u(n+1)) - c M v(n+1/2)),
+///   v(n+1) = v(n+1/2) + dt/2 a(n+1).
+/// Prescribed dofs follow their motion exactly; their reactions do work.
+class ExplicitSolver
+{
+public:
+  /// @param mass lumped mass per dof [kg or kg m^2], all > 0
+  /// @param f_int internal force callback
+  /// @param dt time step [s], > 0
+  /// @param damping mass-proportional damping c [1/s], >= 0
+  ExplicitSolver(std::vector<double> mass, InternalForceFn f_int, double dt,
+                 double damping = 0.0);
+
+  void add_motion(PrescribedMotion m);
+  void add_load(NodalLoad l);
+
+  /// Sets u and v at the current time (default zero) and evaluates a(0).
+  void set_state(std::span<const double> u, std::span<const double> v);
+
+  /// Advances one step. Throws std::runtime_error naming the dof and time if
+  /// a non-finite value appears.
+  void step();
+
+  double time() const { return _t; }
+  std::int64_t steps() const { return _steps; }
+  double dt() const { return _dt; }
+  void set_damping(double c);
+  std::span<const double> u() const { return _u; }
+  std::span<const double> v() const { return _v; }
+  std::span<const double> mass() const { return _m; }
+  /// Reaction forces on prescribed dofs at the last step (zero elsewhere).
+  std::span<const double> reactions() const { return _r; }
+  /// Energy budget at the current time (strain energy = u . f_int / 2,
+  /// exact for linear internal forces).
+  EnergyBudget energy() const;
+
+private:
+  void external_forces(double t, std::span<double> f) const;
+  void impose(double t, bool half);
+
+  std::vector<double> _m, _u, _v, _a, _fint, _fext, _fext_new, _r;
+  std::vector<char> _prescribed;
+  InternalForceFn _f_int;
+  std::vector<PrescribedMotion> _motions;
+  std::vector<NodalLoad> _loads;
+  double _dt, _c, _t = 0.0;
+  std::int64_t _steps = 0;
+  EnergyBudget _e;
+};
+
+} // namespace dembridge::shell

@@ -1,0 +1,142 @@
+#pragma once
+/// @file model.h
+/// Finite-element model on DOLFINx: a Reissner-Mindlin shell (6 dofs per node:
+/// 3 translations, 3 rotations, global frame) or a linear-elastic solid
+/// (3 dofs per node), with lumped mass, internal forces and the critical time
+/// step. The physics is in the UFL files shell/forms/shell.py and solid.py.
+///
+/// Dof layout: dof = node * block_size + component, nodes numbered as the
+/// DOLFINx P1 dofmap. Serial (one MPI rank).
+
+#include "dembridge/shell/explicit.h"
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace dolfinx::mesh
+{
+class Mesh;
+}
+namespace dolfinx::fem
+{
+class FunctionSpace;
+}
+
+namespace dembridge::shell
+{
+
+/// Material and section of the FE model (SI units).
+struct Material
+{
+  double youngs_modulus = 30e9;     ///< E [Pa]
+  double poisson_ratio = 0.2;       ///< nu [-], in (-1, 0.5)
+  double density = 2400.0;          ///< rho [kg/m^3]
+  double thickness = 0.25;          ///< h [m] (shells)
+  double shear_factor = 5.0 / 6.0;  ///< k [-] (shells)
+  double drilling = 1.0;            ///< drilling penalty as a fraction of G h [-] (shells; Hughes-Brezzi: 1)
+};
+
+/// Throws std::runtime_error naming the value and the allowed range.
+void validate(const Material& m, bool shell);
+
+/// How internal forces are computed.
+enum class ForceMethod
+{
+  matmult,  ///< stiffness assembled once (PETSc BAIJ), f = K u (linear forms)
+  residual  ///< residual form assembled at every call (non-linear forms)
+};
+ForceMethod parse_force_method(const std::string& s);
+
+/// f = f_int(u) behind one interface.
+class InternalForce
+{
+public:
+  virtual ~InternalForce() = default;
+  /// @param u dofs (num_dofs), @param f output (num_dofs) [N, N m]
+  virtual void apply(std::span<const double> u, std::span<double> f) = 0;
+  /// Called when the energy weight changes.
+  virtual void update() = 0;
+};
+
+class FEModel
+{
+public:
+  /// Builds the spaces and forms. The mesh's cells decide: triangles and
+  /// quadrilaterals in 3D give a shell, tetrahedra and hexahedra a solid.
+  /// @throws std::runtime_error on bad material values or a mesh of the wrong
+  ///   geometric dimension (a shell needs gdim 3).
+  FEModel(std::shared_ptr<dolfinx::mesh::Mesh> mesh, const Material& material,
+          ForceMethod method = ForceMethod::matmult);
+  ~FEModel();
+  FEModel(FEModel&&) noexcept;
+  FEModel& operator=(FEModel&&) noexcept;
+
+  bool is_shell() const;
+  /// 6 for shells, 3 for solids.
+  int block_size() const;
+  std::size_t num_nodes() const;
+  std::size_t num_dofs() const;
+  const Material& material() const;
+
+  /// Node coordinates, shape (num_nodes, 3), row-major [m].
+  std::span<const double> node_coordinates() const;
+  /// Cell-to-node lists, shape (num_cells, nodes_per_cell), in the reference
+  /// cell's vertex order (quadrilaterals and hexahedra in tensor order).
+  std::span<const std::int32_t> cell_nodes() const;
+  int nodes_per_cell() const;
+  std::size_t num_cells() const;
+
+  /// Shells: average unit normals at the nodes (mean of the adjacent cells'
+  /// unit normals, normalised), shape (num_nodes, 3). Throws for solids.
+  std::span<const double> nodal_normals() const;
+  /// Shells: tributary mid-surface area per node [m^2] (row sums of the area
+  /// mass); solids: tributary volume [m^3].
+  std::vector<double> nodal_measure() const;
+
+  /// Lumped mass per dof [kg, kg m^2 for rotations: rho h^3/12 per area].
+  std::vector<double> lumped_mass() const;
+
+  /// Energy weight eta at the nodes (P1, in [0, 1]); default 1. Setting it
+  /// updates the internal forces (reassembles K for `matmult`).
+  void set_weight(std::span<const double> eta);
+  std::span<const double> weight() const;
+
+  /// f = f_int(u) [N, N m].
+  void internal_force(std::span<const double> u, std::span<double> f) const;
+  InternalForceFn internal_force_fn() const;
+
+  /// Critical time step 2 / sqrt(lambda_max(M^-1 K)) for the given lumped
+  /// mass (power iteration) [s].
+  double critical_time_step(std::span<const double> mass) const;
+
+  /// Tributary weights of the given boundary nodes for a load spread
+  /// uniformly over the boundary facets (edges of shells, faces of solids)
+  /// whose vertices are all selected; the weights sum to 1.
+  /// @throws std::runtime_error if the nodes span no boundary facet.
+  std::vector<double> boundary_load_weights(std::span<const std::int32_t> nodes) const;
+
+  /// Direct solve K u = f with the listed dofs fixed (PETSc LU) [m, rad].
+  std::vector<double> solve_static(std::span<const double> f,
+                                   std::span<const std::int32_t> fixed_dofs) const;
+
+  /// Lowest eigenpair of K x = lambda M x (fixed dofs held) by `iterations`
+  /// steps of inverse iteration from x0 (one LU factorisation). Returns the
+  /// M-normalised vector and its Rayleigh quotient lambda [1/s^2].
+  std::pair<std::vector<double>, double>
+  lowest_mode(std::span<const double> mass, std::span<const std::int32_t> fixed_dofs,
+              std::span<const double> x0, int iterations = 4) const;
+
+  std::shared_ptr<const dolfinx::fem::FunctionSpace> function_space() const;
+  std::shared_ptr<dolfinx::mesh::Mesh> mesh() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> _impl;
+};
+
+} // namespace dembridge::shell

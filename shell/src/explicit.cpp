@@ -1,0 +1,278 @@
+#include "dembridge/shell/explicit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+namespace dembridge::shell
+{
+
+std::vector<std::int32_t>
+select_nodes(std::span<const double> x,
+             const std::function<bool(const std::array<double, 3>&)>& pred,
+             const std::string& what)
+{
+  std::vector<std::int32_t> nodes;
+  const std::size_t n = x.size() / 3;
+  for (std::size_t i = 0; i < n; ++i)
+    if (pred({x[3 * i], x[3 * i + 1], x[3 * i + 2]}))
+      nodes.push_back(static_cast<std::int32_t>(i));
+  if (nodes.empty())
+    throw std::runtime_error("the selection '" + what
+                             + "' contains no node: check its region against the mesh");
+  return nodes;
+}
+
+std::vector<std::int32_t> node_dofs(std::span<const std::int32_t> nodes, int bs,
+                                    std::span<const int> components)
+{
+  std::vector<std::int32_t> dofs;
+  dofs.reserve(nodes.size() * components.size());
+  for (auto n : nodes)
+    for (int c : components)
+    {
+      if (c < 0 || c >= bs)
+        throw std::runtime_error("dof component " + std::to_string(c)
+                                 + " outside [0, " + std::to_string(bs) + ")");
+      dofs.push_back(n * bs + c);
+    }
+  return dofs;
+}
+
+double max_eigenvalue(std::span<const double> mass, const InternalForceFn& f_int,
+                      double rtol, int max_iter)
+{
+  const std::size_t n = mass.size();
+  std::vector<double> y(n), z(n), f(n), minv_sqrt(n);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    minv_sqrt[i] = 1.0 / std::sqrt(mass[i]);
+    // deterministic, rich in high-frequency content
+    y[i] = ((i * 2654435761u) % 1000) / 1000.0 - 0.5;
+  }
+  double lambda = 0.0;
+  for (int it = 0; it < max_iter; ++it)
+  {
+    const double norm = std::sqrt(std::inner_product(y.begin(), y.end(), y.begin(), 0.0));
+    for (std::size_t i = 0; i < n; ++i)
+      z[i] = y[i] / norm * minv_sqrt[i];
+    f_int(z, f);
+    double rq = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      y[i] = f[i] * minv_sqrt[i];
+      rq += y[i] * z[i] / minv_sqrt[i];
+    }
+    if (it > 10 && std::abs(rq - lambda) < rtol * rq)
+      return rq;
+    lambda = rq;
+  }
+  return lambda;
+}
+
+ExplicitSolver::ExplicitSolver(std::vector<double> mass, InternalForceFn f_int,
+                               double dt, double damping)
+    : _m(std::move(mass)), _f_int(std::move(f_int)), _dt(dt), _c(damping)
+{
+  if (!(dt > 0.0) || !std::isfinite(dt))
+    throw std::runtime_error("time step " + std::to_string(dt) + " s: must be > 0");
+  set_damping(damping);
+  for (std::size_t i = 0; i < _m.size(); ++i)
+    if (!(_m[i] > 0.0))
+      throw std::runtime_error("lumped mass of dof " + std::to_string(i)
+                               + " is " + std::to_string(_m[i]) + ": must be > 0");
+  const std::size_t n = _m.size();
+  _u.assign(n, 0.0);
+  _v.assign(n, 0.0);
+  _a.assign(n, 0.0);
+  _fint.assign(n, 0.0);
+  _fext.assign(n, 0.0);
+  _fext_new.assign(n, 0.0);
+  _r.assign(n, 0.0);
+  _prescribed.assign(n, 0);
+}
+
+void ExplicitSolver::set_damping(double c)
+{
+  if (!(c >= 0.0) || !std::isfinite(c))
+    throw std::runtime_error("damping " + std::to_string(c) + " 1/s: must be >= 0");
+  _c = c;
+}
+
+void ExplicitSolver::add_motion(PrescribedMotion m)
+{
+  if (m.dofs.empty())
+    throw std::runtime_error("prescribed motion '" + m.name + "' has no dof");
+  if (m.kind != MotionKind::fixed && !m.value)
+    throw std::runtime_error("prescribed motion '" + m.name + "' needs a history");
+  for (auto d : m.dofs)
+  {
+    if (d < 0 || static_cast<std::size_t>(d) >= _m.size())
+      throw std::runtime_error("prescribed motion '" + m.name + "': dof "
+                               + std::to_string(d) + " out of range");
+    _prescribed[d] = 1;
+  }
+  _motions.push_back(std::move(m));
+}
+
+void ExplicitSolver::add_load(NodalLoad l)
+{
+  if (l.dofs.empty())
+    throw std::runtime_error("load '" + l.name + "' has no dof");
+  if (l.weights.size() != l.dofs.size())
+    throw std::runtime_error("load '" + l.name + "': weights and dofs differ in size");
+  if (!l.value)
+    throw std::runtime_error("load '" + l.name + "' needs a history");
+  for (auto d : l.dofs)
+    if (d < 0 || static_cast<std::size_t>(d) >= _m.size())
+      throw std::runtime_error("load '" + l.name + "': dof " + std::to_string(d)
+                               + " out of range");
+  _loads.push_back(std::move(l));
+}
+
+void ExplicitSolver::external_forces(double t, std::span<double> f) const
+{
+  std::fill(f.begin(), f.end(), 0.0);
+  for (const auto& l : _loads)
+  {
+    const double val = l.value(t);
+    for (std::size_t k = 0; k < l.dofs.size(); ++k)
+      f[l.dofs[k]] += l.weights[k] * val;
+  }
+}
+
+void ExplicitSolver::set_state(std::span<const double> u, std::span<const double> v)
+{
+  if (u.size() != _m.size() || v.size() != _m.size())
+    throw std::runtime_error("set_state: size mismatch with the mass vector");
+  std::copy(u.begin(), u.end(), _u.begin());
+  std::copy(v.begin(), v.end(), _v.begin());
+  for (const auto& m : _motions)
+    for (auto d : m.dofs)
+    {
+      if (m.kind == MotionKind::fixed)
+        _u[d] = _v[d] = 0.0;
+      else if (m.kind == MotionKind::displacement)
+        _u[d] = m.value(_t);
+      else
+        _v[d] = m.value(_t);
+    }
+  _f_int(_u, _fint);
+  external_forces(_t, _fext);
+  for (std::size_t i = 0; i < _m.size(); ++i)
+    _a[i] = _prescribed[i] ? 0.0 : (_fext[i] - _fint[i] - _c * _m[i] * _v[i]) / _m[i];
+  _e = EnergyBudget{};
+  const auto e = energy();
+  _e.initial = e.kinetic + e.strain;
+}
+
+void ExplicitSolver::step()
+{
+  const std::size_t n = _m.size();
+  const double dt = _dt, t_new = _t + dt;
+  // Net force at the old time on every dof, for reactions: m a = f + R.
+  // Kept in _r until the reactions are formed.
+  for (std::size_t i = 0; i < n; ++i)
+    _r[i] = _fext[i] - _fint[i];
+
+  // Half-step velocity on free dofs, then the motions.
+  std::vector<double>& vh = _a; // reuse: a(n) is consumed here
+  for (std::size_t i = 0; i < n; ++i)
+    vh[i] = _prescribed[i] ? 0.0 : _v[i] + 0.5 * dt * _a[i];
+  for (const auto& m : _motions)
+  {
+    for (auto d : m.dofs)
+    {
+      switch (m.kind)
+      {
+      case MotionKind::fixed:
+        vh[d] = 0.0;
+        break;
+      case MotionKind::velocity:
+        vh[d] = m.value(_t + 0.5 * dt);
+        break;
+      case MotionKind::displacement:
+        vh[d] = (m.value(t_new) - _u[d]) / dt;
+        break;
+      }
+    }
+  }
+
+  double w_ext = 0.0, w_damp = 0.0;
+  external_forces(t_new, _fext_new);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const double du = dt * vh[i];
+    _u[i] += du;
+    w_ext += du * 0.5 * (_fext[i] + _fext_new[i]);
+    w_damp += dt * _c * _m[i] * vh[i] * vh[i];
+  }
+  _f_int(_u, _fint);
+  std::swap(_fext, _fext_new);
+
+  double w_presc = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const double fnet = _fext[i] - _fint[i] - _c * _m[i] * vh[i];
+    if (!_prescribed[i])
+    {
+      const double a = fnet / _m[i];
+      _v[i] = vh[i] + 0.5 * dt * a;
+      _r[i] = 0.0;
+      vh[i] = a; // _a now holds a(n+1)
+    }
+    else
+    {
+      const double v_old = _v[i];
+      _v[i] = vh[i];
+      // reaction: m (v_new - v_old) = dt/2 (f_old + f_new) + dt R
+      const double r = _m[i] * (_v[i] - v_old) / dt
+                       - 0.5 * (_r[i] - _c * _m[i] * vh[i] + fnet);
+      w_presc += dt * vh[i] * r;
+      _r[i] = r;
+      vh[i] = 0.0;
+    }
+  }
+  for (const auto& m : _motions)
+    if (m.kind == MotionKind::velocity)
+      for (auto d : m.dofs)
+        _v[d] = m.value(t_new);
+
+  _t = t_new;
+  ++_steps;
+  _e.external_work += w_ext;
+  _e.damping += w_damp;
+  _e.prescribed_work += w_presc;
+
+  double check = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+    check += _u[i] + _v[i];
+  if (!std::isfinite(check))
+  {
+    std::size_t bad = 0;
+    while (bad < n && std::isfinite(_u[bad]) && std::isfinite(_v[bad]))
+      ++bad;
+    std::ostringstream msg;
+    msg << "non-finite displacement or velocity at dof " << bad << " at t = " << _t
+        << " s (step " << _steps
+        << "): the run is unstable; reduce the time step or check the loads";
+    throw std::runtime_error(msg.str());
+  }
+}
+
+EnergyBudget ExplicitSolver::energy() const
+{
+  EnergyBudget e = _e;
+  e.kinetic = 0.0;
+  e.strain = 0.0;
+  for (std::size_t i = 0; i < _m.size(); ++i)
+  {
+    e.kinetic += 0.5 * _m[i] * _v[i] * _v[i];
+    e.strain += 0.5 * _u[i] * _fint[i];
+  }
+  return e;
+}
+
+} // namespace dembridge::shell
