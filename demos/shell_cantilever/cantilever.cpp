@@ -224,6 +224,7 @@ nlohmann::json run_cantilever(const CantileverConfig& cfg)
   const double E0 = e0.kinetic + e0.strain;
 
   std::unique_ptr<XdmfWriter> writer;
+  int frames_written = 0;
   std::ofstream csv;
   const std::int64_t every = std::max<std::int64_t>(1, nsteps / std::max(1, cfg.frames));
   if (!cfg.output_dir.empty())
@@ -231,6 +232,7 @@ nlohmann::json run_cantilever(const CantileverConfig& cfg)
     std::filesystem::create_directories(cfg.output_dir);
     writer = std::make_unique<XdmfWriter>(model, std::filesystem::path(cfg.output_dir) / "cantilever.xdmf");
     writer->write(0.0, solver.u(), solver.v());
+    ++frames_written;
     csv.open(std::filesystem::path(cfg.output_dir) / "history.csv");
     csv << "t_s,tip_m,kinetic_J,strain_J,external_work_J,prescribed_work_J,damping_J,imbalance_J\n";
   }
@@ -265,7 +267,8 @@ nlohmann::json run_cantilever(const CantileverConfig& cfg)
     solver.step();
     ts.push_back(solver.time());
     tipv.push_back(tip_value(solver.u()));
-    if (s % 10 == 0 || s == nsteps)
+    const bool frame = s % every == 0 || s == nsteps;
+    if (s % 10 == 0 || frame)
     {
       const auto e = solver.energy();
       const double tot = e.kinetic + e.strain;
@@ -273,10 +276,13 @@ nlohmann::json run_cantilever(const CantileverConfig& cfg)
       if (damping == 0.0 && cfg.load != "static-tip" && E0 > 0.0)
         drift = std::max(drift, std::abs(tot - E0) / E0);
       imbalance = std::max(imbalance, std::abs(e.imbalance()));
-      if (s % every == 0 || s == nsteps)
+      if (frame)
       {
         if (writer)
+        {
           writer->write(solver.time(), solver.u(), solver.v());
+          ++frames_written;
+        }
         report(e, s % print_every == 0 || s == nsteps);
       }
     }
@@ -284,6 +290,7 @@ nlohmann::json run_cantilever(const CantileverConfig& cfg)
   if (writer)
     writer->close();
 
+  out["frames_written"] = frames_written;
   out["dt_s"] = dt;
   out["dt_critical_s"] = dt_crit;
   out["steps"] = solver.steps();

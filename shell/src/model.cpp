@@ -311,6 +311,12 @@ std::size_t FEModel::num_cells() const { return _impl->cells.size() / _impl->npc
 std::shared_ptr<const FunctionSpace> FEModel::function_space() const { return _impl->V; }
 std::shared_ptr<dolfinx::mesh::Mesh> FEModel::mesh() const { return _impl->mesh; }
 
+Mat FEModel::stiffness_matrix() const
+{
+  auto* mm = dynamic_cast<MatMultForce*>(_impl->force.get());
+  return mm ? mm->matrix() : nullptr;
+}
+
 std::span<const double> FEModel::nodal_normals() const
 {
   if (!_impl->shell)

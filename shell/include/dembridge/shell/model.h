@@ -18,6 +18,8 @@
 #include <utility>
 #include <vector>
 
+typedef struct _p_Mat* Mat; // PETSc matrix handle
+
 namespace dolfinx::mesh
 {
 class Mesh;
@@ -130,6 +132,10 @@ public:
   std::pair<std::vector<double>, double>
   lowest_mode(std::span<const double> mass, std::span<const std::int32_t> fixed_dofs,
               std::span<const double> x0, int iterations = 4) const;
+
+  /// The assembled stiffness (PETSc BAIJ) of the `matmult` method, owned by
+  /// the model; nullptr for `residual`.
+  Mat stiffness_matrix() const;
 
   std::shared_ptr<const dolfinx::fem::FunctionSpace> function_space() const;
   std::shared_ptr<dolfinx::mesh::Mesh> mesh() const;

@@ -1,0 +1,244 @@
+// Shell and solid cantilevers against beam theory (issue "Foundation").
+// Material of the paper's bar unless said: E = 30 GPa, nu = 0.2,
+// rho = 2400 kg/m^3, 0.85 m x 0.25 m, h = 0.25 m.
+#include "cantilever.h"
+#include "dembridge/shell/analytic.h"
+#include "dembridge/shell/mesh.h"
+#include "dembridge/shell/model.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
+#include <mpi.h>
+
+using namespace dembridge;
+using Catch::Matchers::WithinRel;
+
+namespace
+{
+demo::CantileverConfig config(const std::string& load, const std::string& cell)
+{
+  demo::CantileverConfig c;
+  c.load = load;
+  c.cell = cell;
+  c.quiet = true;
+  return c;
+}
+double rel(const nlohmann::json& j) { return j["relative_error"].get<double>(); }
+} // namespace
+
+TEST_CASE("beam references reproduce the published values", "[analytic]")
+{
+  // DOLFINX-0.5.md quotes 1039.9 Hz, 186.10 Hz, 197.6 Hz, 2.2268 mm, 2.0962 mm
+  // to 5 significant digits: agree to half a unit of the last digit.
+  using namespace shell::analytic;
+  const BeamSection s{0.25, 0.25};
+  CHECK(std::abs(axial_clamped_free_frequency(30e9, 2400, 0.85) - 1039.9) < 0.05);
+  CHECK(std::abs(timoshenko_cantilever_frequency(30e9, 0.2, 2400, s, 0.85, 5.0 / 6) - 186.10) < 0.005);
+  CHECK(std::abs(euler_bernoulli_cantilever_frequency(30e9, 2400, s, 0.85) - 197.6) < 0.05);
+  CHECK(std::abs(timoshenko_tip_deflection(1e5, 30e9, 0.2, s, 0.85, 5.0 / 6) - 2.2268e-3) < 5e-8);
+  CHECK(std::abs(euler_bernoulli_tip_deflection(1e5, 30e9, s, 0.85) - 2.0962e-3) < 5e-8);
+  // A slender beam (L/h = 1000) is Euler-Bernoulli: shear and rotary
+  // inertia change the frequency by O((h/L)^2) = 1e-6.
+  const BeamSection thin{0.25, 0.001};
+  CHECK_THAT(timoshenko_cantilever_frequency(30e9, 0.2, 2400, thin, 1.0, 5.0 / 6),
+             WithinRel(euler_bernoulli_cantilever_frequency(30e9, 2400, thin, 1.0), 1e-5));
+}
+
+TEST_CASE("axial free vibration: first frequency within 1 % of c/(4L)", "[shell]")
+{
+  // 1 %: the issue's bound. With free lateral edges the membrane acts with E;
+  // lateral inertia and the O(h^2) discretisation error are ~0.1-0.3 %.
+  for (std::string cell : {"quadrilateral", "triangle"})
+  {
+    auto r = demo::run_cantilever(config("axial", cell));
+    INFO(cell << ": " << r.dump());
+    CHECK(std::abs(rel(r)) < 0.01);
+    // A pure mode under velocity Verlet: kinetic + strain oscillates by
+    // (w dt)^2 / 4 (the conserved shadow energy differs by that much).
+    const double wdt = 2.0 * M_PI * r["first_frequency_hz"].get<double>() * r["dt_s"].get<double>();
+    CHECK(r["energy_drift"].get<double>() < 1.1 * wdt * wdt / 4.0);
+  }
+}
+
+TEST_CASE("bending free vibration: first frequency within 1.5 % of Timoshenko", "[shell]")
+{
+  // 1.5 %: the issue's bound; a plate strip of width = thickness differs from
+  // a Timoshenko beam by plate (nu) effects of a fraction of a percent.
+  for (std::string cell : {"quadrilateral", "triangle"})
+  {
+    auto r = demo::run_cantilever(config("bending", cell));
+    INFO(cell << ": " << r.dump());
+    CHECK(std::abs(rel(r)) < 0.015);
+    // The dynamic frequency equals the mode's Rayleigh quotient: the
+    // integrator's period error (w dt)^2/24 ~ 1e-6 and the crossing
+    // interpolation error are far below 1e-4.
+    CHECK_THAT(r["first_frequency_hz"].get<double>(),
+               WithinRel(r["mode_frequency_hz"].get<double>(), 1e-4));
+  }
+}
+
+TEST_CASE("static tip load: explicit damped run and direct solve vs Timoshenko", "[shell]")
+{
+  for (std::string cell : {"quadrilateral", "triangle"})
+  {
+    auto r = demo::run_cantilever(config("static-tip", cell));
+    INFO(cell << ": " << r.dump());
+    const double ref = r["reference_deflection_m"];
+    // 1.5 %: the issue's bound (plate effects and clamp: ~0.5 %).
+    CHECK(std::abs(r["direct_tip_deflection_m"].get<double>() / ref - 1.0) < 0.015);
+    CHECK(std::abs(r["explicit_tip_deflection_m"].get<double>() / ref - 1.0) < 0.015);
+    // With damping 2 omega_1 over 16/omega_1 every mode has decayed by
+    // exp(-16) ~ 1e-7 (first mode critically damped: (1+16) e^-16 ~ 2e-6):
+    // the damped run must reach the static solution to 1e-4.
+    CHECK(std::abs(r["explicit_vs_direct"].get<double>()) < 1e-4);
+    // Work of the load = strain energy + dissipation, to integration error.
+    CHECK(r["energy_balance_error"].get<double>() < 1e-3);
+  }
+}
+
+TEST_CASE("thin shells do not lock: L/h = 340 within 3 % of Kirchhoff", "[shell]")
+{
+  // nu = 0 makes the Kirchhoff plate strip exactly an Euler-Bernoulli beam,
+  // so the reference is P L^3 / (3 E I) without plate-width effects; 3 % is
+  // the issue's bound (a locking element is off by -76 % to -97 %).
+  for (std::string cell : {"quadrilateral", "triangle"})
+  {
+    auto c = config("static-tip", cell);
+    c.nx = 34;
+    c.ny = 10;
+    c.material.thickness = 0.85 / 340;
+    c.material.poisson_ratio = 0.0;
+    c.solver = "direct";
+    c.tip_load = 1.0;
+    auto r = demo::run_cantilever(c);
+    const double eb = shell::analytic::euler_bernoulli_tip_deflection(
+        1.0, 30e9, {0.25, c.material.thickness}, 0.85);
+    INFO(cell << ": " << r.dump());
+    CHECK(std::abs(r["tip_deflection_m"].get<double>() / eb - 1.0) < 0.03);
+  }
+}
+
+TEST_CASE("rigidly moved and rotated bar gives the same results", "[shell]")
+{
+  // Frame independence: the only differences are round-off (1e-8 relative).
+  for (std::string cell : {"quadrilateral", "triangle"})
+  {
+    auto base_s = config("static-tip", cell), base_d = config("bending", cell);
+    for (auto* c : {&base_s, &base_d})
+    {
+      c->nx = 34;
+      c->ny = 10;
+    }
+    base_s.solver = "direct";
+    base_d.periods = 2.0;
+    // same time step in both frames (the power-iteration estimate of the
+    // critical step is itself only converged to 1e-6)
+    base_d.dt = 3e-6;
+    auto moved_s = base_s, moved_d = base_d;
+    const auto p = shell::Placement::rotation_about({1.0, 2.0, 3.0}, 0.646, {1.5, -2.0, 0.7});
+    moved_s.placement = p;
+    moved_d.placement = p;
+    const auto a = demo::run_cantilever(base_s), b = demo::run_cantilever(moved_s);
+    CHECK_THAT(b["tip_deflection_m"].get<double>(), WithinRel(a["tip_deflection_m"].get<double>(), 1e-8));
+    const auto c = demo::run_cantilever(base_d), d = demo::run_cantilever(moved_d);
+    CHECK_THAT(d["first_frequency_hz"].get<double>(),
+               WithinRel(c["first_frequency_hz"].get<double>(), 1e-8));
+  }
+}
+
+TEST_CASE("undamped free vibration conserves energy over 20 periods", "[shell]")
+{
+  // Start from the static tip-load shape (all modes present in their static
+  // proportions). Velocity Verlet conserves a shadow energy; the error in
+  // kinetic + strain stays bounded by O((w dt)^2) of the energy in high modes.
+  // Bound 1e-3 of the initial energy (the issue's).
+  auto c = config("bending", "quadrilateral");
+  c.nx = 34;
+  c.ny = 10;
+  c.periods = 20.0;
+  c.initial = "static";
+  auto r = demo::run_cantilever(c);
+  INFO(r.dump());
+  CHECK(r["energy_drift"].get<double>() < 1e-3);
+  CHECK(r["end_time_s"].get<double>() >= 20.0 / r["reference_frequency_hz"].get<double>());
+}
+
+TEST_CASE("hexahedral solid cantilever: axial within 1 %, bending within 2.5 %", "[solid]")
+{
+  // Trilinear hexahedra, 8 through the depth: bending error from parasitic
+  // shear ~ 1/n^2 of the bending energy; 2.5 % is the issue's bound. The
+  // clamped face also holds the Poisson contraction (slightly stiffer).
+  auto a = config("axial", "hexahedron");
+  a.nx = 34;
+  a.ny = 8;
+  a.nz = 8;
+  auto ra = demo::run_cantilever(a);
+  INFO(ra.dump());
+  CHECK(std::abs(rel(ra)) < 0.01);
+  auto b = a;
+  b.load = "bending";
+  auto rb = demo::run_cantilever(b);
+  INFO(rb.dump());
+  CHECK(std::abs(rel(rb)) < 0.025);
+}
+
+TEST_CASE("assembled residual and K u give the same internal forces", "[shell]")
+{
+  // Both paths of the internal-force interface on the same model: the
+  // linear residual equals K u to round-off.
+  for (std::string cell : {"quadrilateral", "triangle"})
+  {
+    auto c = config("bending", cell);
+    c.nx = 17;
+    c.ny = 5;
+    c.periods = 2.0;
+    auto a = demo::run_cantilever(c);
+    c.force_method = "residual";
+    auto b = demo::run_cantilever(c);
+    CHECK_THAT(b["tip_deflection_m"].get<double>(), WithinRel(a["tip_deflection_m"].get<double>(), 1e-9));
+  }
+}
+
+TEST_CASE("a mesh written to XDMF and read back gives the same model", "[shell][io]")
+{
+  auto dir = std::filesystem::temp_directory_path() / "dembridge_test_mesh";
+  std::filesystem::create_directories(dir);
+  auto mesh = shell::create_shell_rectangle(MPI_COMM_WORLD, 0.85, 0.25, 17, 5,
+                                            shell::Cell::triangle);
+  shell::write_mesh(*mesh, dir / "bar.xdmf");
+  auto c = config("static-tip", "triangle");
+  c.nx = 17;
+  c.ny = 5;
+  c.solver = "direct";
+  auto a = demo::run_cantilever(c);
+  c.mesh_file = (dir / "bar.xdmf").string();
+  auto b = demo::run_cantilever(c);
+  CHECK_THAT(b["tip_deflection_m"].get<double>(), WithinRel(a["tip_deflection_m"].get<double>(), 1e-10));
+}
+
+TEST_CASE("lumped mass: total mass and rotary inertia", "[shell]")
+{
+  // Row sums of P1 mass are exact totals: rho h A per translation
+  // component and rho h^3/12 A per rotation component.
+  auto mesh = shell::create_shell_rectangle(MPI_COMM_WORLD, 0.85, 0.25, 10, 4,
+                                            shell::Cell::quadrilateral,
+                                            shell::Placement::rotation_about({0, 1, 1}, 0.3));
+  shell::FEModel model(mesh, shell::Material{});
+  const auto m = model.lumped_mass();
+  double mt = 0.0, mr = 0.0;
+  for (std::size_t n = 0; n < model.num_nodes(); ++n)
+  {
+    mt += m[6 * n];
+    mr += m[6 * n + 3];
+  }
+  const double A = 0.85 * 0.25, h = 0.25, rho = 2400;
+  CHECK_THAT(mt, WithinRel(rho * h * A, 1e-12));
+  CHECK_THAT(mr, WithinRel(rho * h * h * h / 12 * A, 1e-12));
+  // normals of a flat rotated sheet: all equal to the rotated z axis
+  const auto n = model.nodal_normals();
+  const auto p = shell::Placement::rotation_about({0, 1, 1}, 0.3);
+  for (std::size_t i = 0; i < model.num_nodes(); ++i)
+    for (int k = 0; k < 3; ++k)
+      CHECK(std::abs(n[3 * i + k] - p.rotation[3 * k + 2]) < 1e-12);
+}
