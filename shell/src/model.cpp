@@ -311,6 +311,24 @@ std::size_t FEModel::num_cells() const { return _impl->cells.size() / _impl->npc
 std::shared_ptr<const FunctionSpace> FEModel::function_space() const { return _impl->V; }
 std::shared_ptr<dolfinx::mesh::Mesh> FEModel::mesh() const { return _impl->mesh; }
 
+NodalLoad FEModel::pressure_load(const std::string& name,
+                                 std::span<const std::int32_t> nodes, History p) const
+{
+  if (!_impl->shell)
+    throw std::runtime_error("pressure load '" + name + "': only for shell models");
+  if (nodes.empty())
+    throw std::runtime_error("pressure load '" + name + "' has no node");
+  const auto area = nodal_measure();
+  NodalLoad load{name, {}, {}, std::move(p)};
+  for (auto n : nodes)
+    for (int i = 0; i < 3; ++i)
+    {
+      load.dofs.push_back(n * 6 + i);
+      load.weights.push_back(area[n] * _impl->normals[3 * n + i]);
+    }
+  return load;
+}
+
 Mat FEModel::stiffness_matrix() const
 {
   auto* mm = dynamic_cast<MatMultForce*>(_impl->force.get());

@@ -122,6 +122,12 @@ public:
   /// @throws std::runtime_error if the nodes span no boundary facet.
   std::vector<double> boundary_load_weights(std::span<const std::int32_t> nodes) const;
 
+  /// Shells: a pressure p(t) [Pa] on the given nodes as a nodal load,
+  /// f_i = p(t) A_i n_i with A_i the tributary area and n_i the average
+  /// normal (positive p pushes along +n). @throws for solids or no node.
+  NodalLoad pressure_load(const std::string& name, std::span<const std::int32_t> nodes,
+                          History p) const;
+
   /// Direct solve K u = f with the listed dofs fixed (PETSc LU) [m, rad].
   std::vector<double> solve_static(std::span<const double> f,
                                    std::span<const std::int32_t> fixed_dofs) const;
