@@ -1,0 +1,92 @@
+#pragma once
+/// @file assembly.h
+/// A bonded sphere assembly: particles (structure of arrays), cohesive links
+/// and the concrete material. METHOD.md section 1.
+
+#include "dembridge/dem/law.h"
+#include "dembridge/dem/stiffness.h"
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace dembridge::dem
+{
+
+/// Concrete as the DE model sees it (SI units; angles in degrees).
+struct Material
+{
+  double youngs_modulus = 30e9;  ///< macroscopic target E [Pa] (enters eq. [1])
+  double poisson_ratio = 0.2;    ///< macroscopic target nu [-] (enters eq. [1])
+  double density = 2400.0;       ///< bulk density of the concrete [kg/m^3]
+  MicroMacro micro{0.2, 1.0, 1.0}; ///< alpha, beta, gamma of eq. [1] (identify them!)
+  double tensile = 3.3e6;        ///< local tensile strength T [Pa]
+  double cohesion = 4.4e6;       ///< cohesion C0 [Pa]
+  double zeta = 10.0;            ///< softening factor [-]
+  double phi_i_deg = 30.0;       ///< internal friction angle [degree]
+  double phi_c_deg = 30.0;       ///< contact friction angle [degree]
+  /// @throws std::runtime_error naming the value and its allowed range.
+  void validate() const;
+  /// The law's parameters for a pair of radii at initial distance d_init.
+  LinkLaw law(double ra, double rb, double d_init) const;
+};
+
+/// Particles as structure of arrays; vectors are (n, 3) row-major.
+struct Particles
+{
+  std::vector<double> x;        ///< position [m]
+  std::vector<double> x0;       ///< reference position (displacement = x - x0) [m]
+  std::vector<double> v;        ///< velocity [m/s]
+  std::vector<double> w;        ///< angular velocity [rad/s]
+  std::vector<double> f;        ///< force [N]
+  std::vector<double> t;        ///< torque [N m]
+  std::vector<double> r;        ///< radius [m]
+  std::vector<double> m;        ///< mass [kg]
+  std::vector<double> inertia;  ///< moment of inertia 2/5 m r^2 [kg m^2]
+  std::size_t size() const { return r.size(); }
+};
+
+/// Spheres of solid density rho_s = rho_bulk / packing_fraction (METHOD.md).
+/// @param x centres (n, 3) [m]; @param r radii (n) [m], > 0
+/// @throws std::runtime_error on a radius <= 0 or a non-finite coordinate.
+Particles make_particles(std::span<const double> x, std::span<const double> r, double rho_bulk,
+                         double packing_fraction);
+
+/// State of a link.
+enum class LinkState : std::uint8_t
+{
+  intact = 0,
+  broken_tension = 1,
+  broken_shear = 2
+};
+
+/// Cohesive links as structure of arrays, each pair ordered a < b, the list
+/// sorted by (a, b).
+struct Links
+{
+  std::vector<std::int32_t> a, b;
+  std::vector<double> d0;         ///< initial distance D_init [m]
+  std::vector<double> kn, ks;     ///< stiffnesses [N/m]
+  std::vector<double> s_int;      ///< interaction surface [m^2]
+  std::vector<double> fs;         ///< shear force on b, (n, 3) [N]
+  std::vector<double> n;          ///< unit normal a -> b at the last step, (n, 3)
+  std::vector<double> delta_max;  ///< largest elongation reached [m]
+  std::vector<LinkState> state;
+  std::size_t size() const { return a.size(); }
+  std::size_t count(LinkState s) const;
+};
+
+/// Links between every pair with D_init <= lambda (R_a + R_b), lambda >= 1,
+/// stiffnesses from equation [1]. @throws std::runtime_error if lambda < 1.
+Links create_links(const Particles& p, double lambda, const Material& mat);
+
+/// Number of pairs with D <= lambda (R_a + R_b) for each lambda in `lambdas`.
+std::vector<std::size_t> count_pairs(std::span<const double> x, std::span<const double> r,
+                                     std::span<const double> lambdas);
+
+/// Smallest lambda (to 1e-4) giving a mean number of links per sphere of at
+/// least `target` (2 x pairs / spheres). @throws if target is unreachable
+/// with lambda <= 2.
+double lambda_for_mean_links(std::span<const double> x, std::span<const double> r, double target);
+
+} // namespace dembridge::dem

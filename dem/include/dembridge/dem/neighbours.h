@@ -1,0 +1,74 @@
+#pragma once
+/// @file neighbours.h
+/// Cell-list neighbour search with a skin (a service the force loop asks for).
+/// Pairs (a < b, sorted) whose gap is below the skin carry a contact history
+/// (shear force) that survives rebuilds. The list is rebuilt only when a
+/// sphere has moved more than half the skin since the last build.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace dembridge::dem
+{
+
+/// Uniform grid of cubic cells over a bounding box; each cell lists the
+/// particles whose centre lies in it.
+class CellGrid
+{
+public:
+  /// @param x centres (n, 3); @param cell cell edge [m] (>= the search range)
+  CellGrid(std::span<const double> x, double cell);
+  /// Calls fn(j) for every particle j in the 27 cells around point p.
+  template <typename Fn>
+  void for_each_near(const double* p, Fn&& fn) const
+  {
+    int c[3];
+    for (int k = 0; k < 3; ++k)
+      c[k] = cell_of(p[k], k);
+    for (int i = std::max(c[0] - 1, 0); i <= std::min(c[0] + 1, _n[0] - 1); ++i)
+      for (int j = std::max(c[1] - 1, 0); j <= std::min(c[1] + 1, _n[1] - 1); ++j)
+        for (int k = std::max(c[2] - 1, 0); k <= std::min(c[2] + 1, _n[2] - 1); ++k)
+        {
+          const std::size_t id = (std::size_t(i) * _n[1] + j) * _n[2] + k;
+          for (std::int32_t q = _start[id]; q < _start[id + 1]; ++q)
+            fn(_items[q]);
+        }
+  }
+
+private:
+  int cell_of(double v, int k) const;
+  double _lo[3], _h;
+  int _n[3];
+  std::vector<std::int32_t> _start, _items;
+};
+
+class NeighbourList
+{
+public:
+  /// @param skin extra search distance beyond contact [m], > 0
+  explicit NeighbourList(double skin);
+
+  /// Rebuilds if a sphere moved more than skin/2 since the last build (or
+  /// never built). Returns true if it rebuilt. Links (sorted a < b) are
+  /// matched to pairs so the force loop knows which pairs are bonded.
+  bool update(std::span<const double> x, std::span<const double> r,
+              std::span<const std::int32_t> link_a, std::span<const std::int32_t> link_b);
+
+  std::size_t size() const { return a.size(); }
+  std::size_t builds() const { return _builds; }
+  double skin() const { return _skin; }
+
+  std::vector<std::int32_t> a, b;  ///< pairs, a < b, sorted
+  std::vector<std::int32_t> link;  ///< link index of the pair, or -1
+  std::vector<double> fs;          ///< contact shear force on b, (pairs, 3) [N]
+  std::vector<double> n;           ///< contact normal at the last step, (pairs, 3)
+  std::vector<std::uint8_t> touching; ///< 1 while the pair is in contact
+
+private:
+  double _skin;
+  std::size_t _builds = 0;
+  std::vector<double> _x_build;
+};
+
+} // namespace dembridge::dem

@@ -1,0 +1,130 @@
+#pragma once
+/// @file solver.h
+/// The DEM force loop (it only calls the laws of law.h) and the explicit
+/// integrator (velocity Verlet: half kick, drift, forces, half kick) with
+/// boundary conditions on particle sets, velocity-proportional damping and
+/// the energy budget. Single-threaded for now.
+
+#include "dembridge/dem/assembly.h"
+#include "dembridge/dem/neighbours.h"
+
+#include <array>
+#include <functional>
+#include <string>
+
+namespace dembridge::dem
+{
+
+/// Energy dissipated or stored in the force loop since the start [J].
+struct ForceCounters
+{
+  double friction = 0.0;   ///< sliding of contacts
+  double breakage = 0.0;   ///< elastic energy released when links break
+};
+
+/// Computes forces and torques on all particles from the intact links and
+/// the contacts, using p.v and p.w as the velocities over the step (for the
+/// incremental shear). Updates link and contact history, breaks links.
+/// Forces are zeroed first.
+void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
+                    ForceCounters& c);
+
+/// Elastic energy stored in intact links and contacts [J].
+double elastic_energy(const Particles& p, const Links& l, const NeighbourList& nl,
+                      const Material& mat);
+
+/// Energy dissipated by tensile softening of all links [J].
+double softening_energy(const Links& l, const Material& mat);
+
+/// Upper bound of the largest eigenvalue of M^-1 K of the linearised
+/// assembly (links and current contacts; translations and rotations), by
+/// block Gershgorin on M^-1/2 K M^-1/2; the critical step is 2/sqrt(bound).
+double critical_time_step(const Particles& p, const Links& l);
+
+using History = std::function<double(double)>;
+
+enum class MotionKind
+{
+  fixed,        ///< translations and rotations held at zero velocity
+  velocity,     ///< the chosen components follow value(t) [m/s]
+  displacement  ///< the chosen components follow x0 + value(t) [m]
+};
+
+/// A kinematic condition on a set of particles.
+struct ParticleMotion
+{
+  std::string name;
+  std::vector<std::int32_t> ids;
+  MotionKind kind = MotionKind::fixed;
+  std::array<bool, 3> components{true, true, true}; ///< for velocity/displacement
+  History value;
+};
+
+/// External force on each particle of a set: direction * value(t) [N].
+struct ParticleForce
+{
+  std::string name;
+  std::vector<std::int32_t> ids;
+  std::array<double, 3> direction{1.0, 0.0, 0.0};
+  History value;
+};
+
+/// Energy budget [J]: kinetic + elastic + softening + breakage + friction +
+/// damping = initial + external_work + prescribed_work.
+struct DemEnergy
+{
+  double initial = 0.0, kinetic = 0.0, elastic = 0.0, softening = 0.0, breakage = 0.0,
+         friction = 0.0, damping = 0.0, external_work = 0.0, prescribed_work = 0.0;
+  double imbalance() const
+  {
+    return kinetic + elastic + softening + breakage + friction + damping - initial
+           - external_work - prescribed_work;
+  }
+};
+
+class DemSolver
+{
+public:
+  /// @param dt time step [s], > 0; @param damping c [1/s] (force -c m v,
+  /// torque -c I omega), >= 0; @param skin neighbour skin [m], > 0
+  DemSolver(Particles& p, Links& l, const Material& mat, double dt, double damping, double skin);
+
+  /// Selects particles whose centre satisfies pred. @throws naming `what` if none.
+  static std::vector<std::int32_t>
+  select(const Particles& p, const std::function<bool(const std::array<double, 3>&)>& pred,
+         const std::string& what);
+
+  void add_motion(ParticleMotion m);
+  void add_force(ParticleForce f);
+  /// Computes the initial forces and energy (call after the conditions).
+  void start();
+  /// One step. @throws std::runtime_error naming the particle and time if a
+  /// position or velocity becomes NaN or infinite.
+  void step();
+
+  DemEnergy energy() const;
+  /// Sum of the reaction forces the condition `name` applies [N].
+  std::array<double, 3> reaction(const std::string& name) const;
+  double time() const { return _t; }
+  std::int64_t steps() const { return _steps; }
+  double dt() const { return _dt; }
+  void set_damping(double c);
+  const NeighbourList& neighbours() const { return _nl; }
+
+private:
+  void kick(double h);
+  Particles& _p;
+  Links& _l;
+  Material _mat;
+  NeighbourList _nl;
+  ForceCounters _counters;
+  std::vector<ParticleMotion> _motions;
+  std::vector<ParticleForce> _forces;
+  std::vector<std::uint8_t> _held;      // per particle and component: 1 if prescribed
+  std::vector<double> _fext, _reac, _fold;
+  double _dt, _c, _t = 0.0;
+  std::int64_t _steps = 0;
+  DemEnergy _e;
+};
+
+} // namespace dembridge::dem

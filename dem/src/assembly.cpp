@@ -1,0 +1,191 @@
+#include "dembridge/dem/assembly.h"
+#include "dembridge/dem/neighbours.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+namespace dembridge::dem
+{
+namespace
+{
+[[noreturn]] void fail(const std::string& what, double v, const std::string& allowed)
+{
+  std::ostringstream s;
+  s << what << " = " << v << ": must be " << allowed;
+  throw std::runtime_error(s.str());
+}
+double max_radius(std::span<const double> r)
+{
+  return r.empty() ? 0.0 : *std::max_element(r.begin(), r.end());
+}
+} // namespace
+
+void Material::validate() const
+{
+  if (!(youngs_modulus > 0.0) || !std::isfinite(youngs_modulus))
+    fail("Young's modulus E", youngs_modulus, "> 0 Pa");
+  if (!(poisson_ratio > -1.0 && poisson_ratio < 0.5))
+    fail("Poisson's ratio nu", poisson_ratio, "in (-1, 0.5)");
+  if (!(density > 0.0) || !std::isfinite(density))
+    fail("density", density, "> 0 kg/m^3");
+  if (!(tensile >= 0.0) || !std::isfinite(tensile))
+    fail("tensile strength T", tensile, ">= 0 Pa");
+  if (!(cohesion >= 0.0) || !std::isfinite(cohesion))
+    fail("cohesion C0", cohesion, ">= 0 Pa");
+  if (!(zeta >= 0.0) || !std::isfinite(zeta))
+    fail("softening factor zeta", zeta, ">= 0");
+  if (!(phi_i_deg >= 0.0 && phi_i_deg < 90.0))
+    fail("internal friction angle phi_i", phi_i_deg, "in [0, 90) degrees");
+  if (!(phi_c_deg >= 0.0 && phi_c_deg < 90.0))
+    fail("contact friction angle phi_c", phi_c_deg, "in [0, 90) degrees");
+  // eq. [1] must give positive stiffnesses
+  (void)link_stiffness(youngs_modulus, poisson_ratio, 1.0, 1.0, micro);
+}
+
+LinkLaw Material::law(double ra, double rb, double d_init) const
+{
+  const double s = interaction_surface(ra, rb);
+  const auto k = link_stiffness(youngs_modulus, poisson_ratio, s, d_init, micro);
+  const double deg = std::numbers::pi / 180.0;
+  // zeta = 0 would make the softening slope infinite: a brittle link
+  return {k.kn, k.ks, s, tensile, cohesion, std::tan(phi_i_deg * deg), std::tan(phi_c_deg * deg),
+          std::max(zeta, 1e-12)};
+}
+
+Particles make_particles(std::span<const double> x, std::span<const double> r, double rho_bulk,
+                         double packing_fraction)
+{
+  if (x.size() != 3 * r.size())
+    throw std::runtime_error("make_particles: positions must be (n, 3) for n radii");
+  if (!(rho_bulk > 0.0))
+    fail("density", rho_bulk, "> 0 kg/m^3");
+  if (!(packing_fraction > 0.0 && packing_fraction <= 1.0))
+    fail("packing fraction", packing_fraction, "in (0, 1]");
+  const double rho_s = rho_bulk / packing_fraction;
+  Particles p;
+  const std::size_t n = r.size();
+  p.x.assign(x.begin(), x.end());
+  p.x0 = p.x;
+  p.v.assign(3 * n, 0.0);
+  p.w.assign(3 * n, 0.0);
+  p.f.assign(3 * n, 0.0);
+  p.t.assign(3 * n, 0.0);
+  p.r.assign(r.begin(), r.end());
+  p.m.resize(n);
+  p.inertia.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    if (!(r[i] > 0.0) || !std::isfinite(r[i]))
+      fail("radius of sphere " + std::to_string(i), r[i], "> 0 m");
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(x[3 * i + k]))
+        fail("coordinate of sphere " + std::to_string(i), x[3 * i + k], "finite");
+    p.m[i] = rho_s * 4.0 / 3.0 * std::numbers::pi * r[i] * r[i] * r[i];
+    p.inertia[i] = 0.4 * p.m[i] * r[i] * r[i];
+  }
+  return p;
+}
+
+std::size_t Links::count(LinkState s) const
+{
+  return static_cast<std::size_t>(std::count(state.begin(), state.end(), s));
+}
+
+namespace
+{
+/// Calls fn(i, j, D) for each pair i < j with D <= lambda (R_i + R_j).
+template <typename Fn>
+void for_pairs_within(std::span<const double> x, std::span<const double> r, double lambda, Fn&& fn)
+{
+  const double rmax = max_radius(r);
+  CellGrid grid(x, 2.0 * lambda * rmax);
+  const std::size_t n = r.size();
+  std::vector<std::pair<std::int32_t, double>> found;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    found.clear();
+    grid.for_each_near(&x[3 * i],
+                       [&](std::int32_t j)
+                       {
+                         if (j <= static_cast<std::int32_t>(i))
+                           return;
+                         const double dx = x[3 * j] - x[3 * i], dy = x[3 * j + 1] - x[3 * i + 1],
+                                      dz = x[3 * j + 2] - x[3 * i + 2];
+                         const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
+                         if (d <= lambda * (r[i] + r[j]))
+                           found.emplace_back(j, d);
+                       });
+    std::sort(found.begin(), found.end());
+    for (auto [j, d] : found)
+      fn(static_cast<std::int32_t>(i), j, d);
+  }
+}
+} // namespace
+
+Links create_links(const Particles& p, double lambda, const Material& mat)
+{
+  if (!(lambda >= 1.0) || !std::isfinite(lambda))
+    fail("interaction range lambda", lambda, ">= 1");
+  mat.validate();
+  Links l;
+  for_pairs_within(p.x, p.r, lambda,
+                   [&](std::int32_t i, std::int32_t j, double d)
+                   {
+                     const LinkLaw law = mat.law(p.r[i], p.r[j], d);
+                     l.a.push_back(i);
+                     l.b.push_back(j);
+                     l.d0.push_back(d);
+                     l.kn.push_back(law.kn);
+                     l.ks.push_back(law.ks);
+                     l.s_int.push_back(law.s_int);
+                     for (int k = 0; k < 3; ++k)
+                       l.n.push_back((p.x[3 * j + k] - p.x[3 * i + k]) / d);
+                   });
+  l.fs.assign(3 * l.size(), 0.0);
+  l.delta_max.assign(l.size(), 0.0);
+  l.state.assign(l.size(), LinkState::intact);
+  return l;
+}
+
+std::vector<std::size_t> count_pairs(std::span<const double> x, std::span<const double> r,
+                                     std::span<const double> lambdas)
+{
+  const double lmax = lambdas.empty() ? 1.0 : *std::max_element(lambdas.begin(), lambdas.end());
+  std::vector<std::size_t> c(lambdas.size(), 0);
+  for_pairs_within(x, r, lmax,
+                   [&](std::int32_t i, std::int32_t j, double d)
+                   {
+                     const double q = d / (r[i] + r[j]);
+                     for (std::size_t k = 0; k < lambdas.size(); ++k)
+                       if (q <= lambdas[k])
+                         ++c[k];
+                   });
+  return c;
+}
+
+double lambda_for_mean_links(std::span<const double> x, std::span<const double> r, double target)
+{
+  if (!(target > 0.0))
+    fail("target mean links per sphere", target, "> 0");
+  // ratios q = D / (Ra + Rb) of all pairs up to 2; pick the quantile
+  std::vector<double> q;
+  for_pairs_within(x, r, 2.0, [&](std::int32_t i, std::int32_t j, double d)
+                   { q.push_back(d / (r[i] + r[j])); });
+  const std::size_t need = static_cast<std::size_t>(std::ceil(target * r.size() / 2.0));
+  if (need == 0)
+    return 1.0;
+  if (need > q.size())
+  {
+    std::ostringstream s;
+    s << "a mean of " << target << " links per sphere needs lambda > 2 on this packing (at "
+      << "lambda = 2 the mean is " << 2.0 * q.size() / r.size() << ")";
+    throw std::runtime_error(s.str());
+  }
+  std::nth_element(q.begin(), q.begin() + (need - 1), q.end());
+  return std::max(1.0, q[need - 1] * (1.0 + 1e-12));
+}
+
+} // namespace dembridge::dem

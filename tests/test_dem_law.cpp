@@ -1,0 +1,120 @@
+// The concrete law of the DE model (METHOD.md section 1), pair by pair,
+// against the closed-form values of the law itself.
+#include "dembridge/dem/law.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <numbers>
+
+using namespace dembridge::dem;
+using Catch::Matchers::WithinRel;
+
+namespace
+{
+// S = pi (1 mm)^2, K_n = 1e7 N/m: elastic limit delta_e = S T / K_n
+LinkLaw law()
+{
+  return {1e7, 4e6, std::numbers::pi * 1e-6, 3.3e6, 4.4e6, std::tan(30 * std::numbers::pi / 180),
+          std::tan(20 * std::numbers::pi / 180), 10.0};
+}
+double norm(const Vec3& a) { return std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
+} // namespace
+
+TEST_CASE("normal law: elastic, peak, softening slope, rupture, secant unloading", "[dem][law]")
+{
+  const LinkLaw p = law();
+  const double fpk = p.s_int * p.tensile, de = fpk / p.kn, dr = (1 + p.zeta) * de;
+  // elastic: K_n delta, in tension and compression
+  auto r = link_normal_force(0.5 * de, 0.0, p);
+  CHECK_THAT(r.fn, WithinRel(p.kn * 0.5 * de, 1e-14));
+  CHECK(r.state == NormalState::elastic);
+  CHECK_THAT(link_normal_force(-3 * de, 0.0, p).fn, WithinRel(-3 * p.kn * de, 1e-14));
+  CHECK(link_normal_force(-100 * de, 0.0, p).state != NormalState::broken); // compression never breaks
+  // peak S_int T at delta_e
+  CHECK_THAT(link_normal_force(de, 0.0, p).fn, WithinRel(fpk, 1e-14));
+  // softening slope -K_n / zeta
+  const double f1 = link_normal_force(2 * de, 0.0, p).fn, f2 = link_normal_force(3 * de, 2 * de, p).fn;
+  CHECK_THAT((f2 - f1) / de, WithinRel(-p.kn / p.zeta, 1e-12));
+  // rupture at (1 + zeta) delta_e: just before, positive; at it, broken
+  CHECK(link_normal_force(dr * (1 - 1e-9), 0.0, p).fn > 0.0);
+  CHECK(link_normal_force(dr, 0.0, p).state == NormalState::broken);
+  CHECK(link_normal_force(dr, 0.0, p).fn == 0.0);
+  // unloading from delta_max = 4 delta_e follows the secant to the origin
+  const double dm = 4 * de, fdm = fpk - p.kn / p.zeta * (dm - de);
+  auto u = link_normal_force(2 * de, dm, p);
+  CHECK(u.state == NormalState::softening);
+  CHECK_THAT(u.fn, WithinRel(fdm / dm * 2 * de, 1e-14));
+  CHECK(u.delta_max == dm);
+  // reloading past delta_max rejoins the envelope
+  CHECK_THAT(link_normal_force(5 * de, dm, p).fn, WithinRel(fpk - p.kn / p.zeta * 4 * de, 1e-14));
+  // once broken, always broken
+  CHECK(link_normal_force(0.5 * de, dr, p).state == NormalState::broken);
+}
+
+TEST_CASE("softening dissipation: zero when elastic, the whole triangle at rupture", "[dem][law]")
+{
+  const LinkLaw p = law();
+  const double fpk = p.s_int * p.tensile, de = fpk / p.kn, dr = (1 + p.zeta) * de;
+  CHECK(softening_dissipation(0.9 * de, p) == 0.0);
+  CHECK_THAT(softening_dissipation(dr, p), WithinRel(0.5 * fpk * dr, 1e-12));
+  CHECK_THAT(softening_dissipation(10 * dr, p), WithinRel(0.5 * fpk * dr, 1e-12));
+  // in between: loading-path area minus secant energy
+  const double dm = 3 * de, f = fpk - p.kn / p.zeta * 2 * de;
+  CHECK_THAT(softening_dissipation(dm, p),
+             WithinRel(0.5 * fpk * de + 0.5 * (fpk + f) * 2 * de - 0.5 * f * dm, 1e-12));
+}
+
+TEST_CASE("shear law: Mohr-Coulomb cap of a link", "[dem][law]")
+{
+  const LinkLaw p = law();
+  const double c0 = p.s_int * p.cohesion;
+  // in compression F_c = 1000 N the cap is S C0 + F_c tan(phi_i)
+  const double fn = -1000.0, cap = c0 + 1000.0 * p.tan_phi_i;
+  const double du = 0.999 * cap / p.ks;
+  auto s = link_shear_force({0, 0, 0}, {du, 0, 0}, fn, p);
+  CHECK(!s.exceeded);
+  CHECK_THAT(s.fs[0], WithinRel(-p.ks * du, 1e-14)); // opposes the motion of b
+  CHECK(link_shear_force({0, 0, 0}, {1.002 * cap / p.ks, 0, 0}, fn, p).exceeded);
+  // in tension the cap shrinks: F_c < 0
+  CHECK(link_shear_force({0, 0, 0}, {0.999 * c0 / p.ks, 0, 0}, 100.0, p).exceeded);
+}
+
+TEST_CASE("contacts: push only, Coulomb friction cap", "[dem][law]")
+{
+  const LinkLaw p = law();
+  CHECK(contact_normal_force(2.1e-3, 2e-3, p.kn) == 0.0);
+  CHECK_THAT(contact_normal_force(1.9e-3, 2e-3, p.kn), WithinRel(-p.kn * 1e-4, 1e-9));
+  const double fn = -500.0, cap = 500.0 * p.tan_phi_c;
+  auto s = contact_shear_force({0, 0, 0}, {0, 2 * cap / p.ks, 0}, fn, p);
+  CHECK(s.exceeded);
+  CHECK_THAT(norm(s.fs), WithinRel(cap, 1e-14));
+  CHECK_THAT(s.slip_energy, WithinRel(cap * cap / p.ks, 1e-12)); // cap x slip (slip = cap/ks)
+  auto t = contact_shear_force({0, 0, 0}, {0, 0.5 * cap / p.ks, 0}, fn, p);
+  CHECK(!t.exceeded);
+  CHECK(t.slip_energy == 0.0);
+  // no compression, no friction
+  CHECK(norm(contact_shear_force({1, 0, 0}, {0, 0, 0}, 0.0, p).fs) == 0.0);
+}
+
+TEST_CASE("torques: magnitude R |F_s|, direction -n x F_s", "[dem][law]")
+{
+  const Vec3 n{1, 0, 0}, fs{0, 2.0, 0};
+  const auto t = shear_torques(n, fs, 0.003, 0.005);
+  // n x fs = (0, 0, 2): t_a = -l_a (0,0,2), t_b = -l_b (0,0,2)
+  CHECK_THAT(t[0][2], WithinRel(-0.006, 1e-14));
+  CHECK_THAT(t[1][2], WithinRel(-0.010, 1e-14));
+  CHECK(t[0][0] == 0.0);
+}
+
+TEST_CASE("shear rotation keeps the magnitude and follows the normal", "[dem][law]")
+{
+  const double a = 0.3;
+  const Vec3 n0{1, 0, 0}, n1{std::cos(a), std::sin(a), 0}, fs{0, 5.0, 1.0};
+  const auto r = rotate_shear(fs, n0, n1, 0.0);
+  CHECK_THAT(norm(r), WithinRel(norm(fs), 1e-14));
+  CHECK(std::abs(r[0] * n1[0] + r[1] * n1[1] + r[2] * n1[2]) < 1e-14); // in the new plane
+  CHECK_THAT(r[1], WithinRel(5.0 * std::cos(a), 1e-14));
+  // twist about the normal
+  const auto q = rotate_shear({0, 1, 0}, n0, n0, std::numbers::pi / 2);
+  CHECK(std::abs(q[2] - 1.0) < 1e-14);
+}
