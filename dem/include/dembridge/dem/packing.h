@@ -1,0 +1,105 @@
+#pragma once
+/// @file packing.h
+/// Dense, polydisperse, isotropic sphere packings filling a region given by a
+/// signed-distance function (box, cylinder, or any), and plain `x y z r`
+/// packing files.
+///
+/// Method (a collective-rearrangement generator, METHOD.md allows any method
+/// that meets the figures): radii are drawn from the distribution, their
+/// number set by the target packing fraction and the region's volume;
+/// centres start one per cell of a grid (cells picked at random, centres
+/// jittered within them) with radii scaled down to 0.8; then Jacobi sweeps push every overlapping pair apart (each sphere
+/// moves by its share, weighted by the other's volume) and push spheres that
+/// cross the boundary back inside, while the radii grow to full size. It
+/// If the overlap stops falling (jammed: the target was too dense for the
+/// region), all radii are scaled by 0.995 and the sweeps go on, so the
+/// target fraction is an upper bound; `backoffs` counts these steps. It
+/// stops when no overlap or boundary penetration exceeds the tolerance, or,
+/// once they are below `shrink_below` Rmin, shrinks the few spheres still
+/// overlapping by what is left (reported: count and largest reduction).
+/// Spheres pressed against the boundary leave no gap at flat faces. The
+/// result is renumbered along a Morton curve (memory order follows space).
+/// Deterministic for a seed, whatever the thread count.
+
+#include <array>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace dembridge::dem
+{
+
+using Point = std::array<double, 3>;
+
+/// A region: sdf(x) < 0 inside, > 0 outside, |grad sdf| = 1 near the boundary.
+struct Region
+{
+  std::string name;
+  std::function<double(const Point&)> sdf;
+  Point lo, hi;       ///< bounding box [m]
+  double volume;      ///< [m^3]
+};
+
+/// Axis-aligned box [lo, hi]. @throws if any hi <= lo.
+Region box_region(const Point& lo, const Point& hi);
+/// Cylinder of the given radius and height, axis along z from `base`.
+Region cylinder_region(const Point& base, double radius, double height);
+/// Any region from its signed distance and bounding box; the volume is
+/// measured on a grid of 100^3 points (1e-2 relative for smooth shapes).
+Region sdf_region(const std::string& name, std::function<double(const Point&)> sdf,
+                  const Point& lo, const Point& hi);
+
+struct PackingOptions
+{
+  double mean_radius = 0.0;     ///< mean radius [m] (used if count == 0)
+  std::size_t count = 0;        ///< number of spheres (0: from mean_radius)
+  double radius_ratio = 2.0;    ///< Rmax / Rmin, in [1, 3]; radii uniform in [Rmin, Rmax]
+  double target_fraction = 0.60;///< solid fraction of the whole region (the bulk gets ~0.62)
+  double tolerance = 1e-3;      ///< allowed overlap and penetration, fraction of Rmin
+  unsigned seed = 1;
+  int max_sweeps = 20000;
+  int growth_sweeps = 1000;     ///< sweeps over which the radii grow from 0.8 to 1
+  /// Once overlaps and penetrations are below this fraction of Rmin, the
+  /// spheres still overlapping are shrunk to remove them (0: never).
+  double shrink_below = 0.02;
+  bool verbose = false;
+};
+
+struct Packing
+{
+  std::vector<double> x;  ///< centres (n, 3) [m]
+  std::vector<double> r;  ///< radii [m]
+  int sweeps = 0;
+  double max_overlap = 0.0;     ///< largest pair overlap / Rmin
+  double max_penetration = 0.0; ///< largest boundary penetration / Rmin
+  std::size_t shrunk = 0;       ///< spheres shrunk by the final step
+  int backoffs = 0;             ///< times all radii were scaled by 0.995 to unjam
+  double max_shrink = 0.0;      ///< largest radius reduction / Rmin
+  std::size_t size() const { return r.size(); }
+};
+
+/// Generates a packing. @throws std::runtime_error on bad options (radius
+/// ratio outside [1, 3], radius <= 0, fraction outside (0, 0.74)) or if it
+/// does not converge in max_sweeps (the message gives the overlap reached).
+Packing generate_packing(const Region& region, const PackingOptions& opt);
+
+/// Solid fraction inside the region shrunk by `margin` [m] (sdf < -margin),
+/// measured on a regular grid of about `samples` points.
+double packing_fraction(const Packing& p, const Region& region, double margin,
+                        std::size_t samples = 2000000);
+
+/// Largest distance from a point of the face sdf = 0 to the nearest sphere
+/// surface, sampled on a grid over the given flat face {x : x[axis] = value}
+/// within the region and at least Rmax from the face's edges [m]: the widest
+/// gap at that face.
+double face_gap(const Packing& p, const Region& region, int axis, double value,
+                int samples_per_side = 200);
+
+/// Writes `x y z r` lines (full precision).
+void write_packing(const std::filesystem::path& file, const Packing& p);
+/// Reads `x y z r` lines ('#' starts a comment). @throws std::runtime_error
+/// naming the file and line for a malformed line or a radius <= 0.
+Packing read_packing(const std::filesystem::path& file);
+
+} // namespace dembridge::dem
