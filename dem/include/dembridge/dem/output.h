@@ -1,0 +1,46 @@
+#pragma once
+/// @file output.h
+/// XDMF + HDF5 time series of the particles for ParaView: position (as the
+/// points), radius [m], displacement [m], velocity [m/s], damage (broken /
+/// initial links of each sphere) and, optionally, the broken links as line
+/// cells (the crack pattern). Every frame is flushed and the XDMF rewritten,
+/// so what was written stays readable if the run stops.
+
+#include "dembridge/dem/assembly.h"
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace dembridge::dem
+{
+
+class ParticleWriter
+{
+public:
+  /// Creates `file` (.xdmf) and the .h5 beside it. @param cracks also write
+  /// the broken links as a second grid "cracks".
+  ParticleWriter(const std::filesystem::path& file, const Links& links, std::size_t particles,
+                 bool cracks = true);
+  ~ParticleWriter();
+  ParticleWriter(const ParticleWriter&) = delete;
+  ParticleWriter& operator=(const ParticleWriter&) = delete;
+
+  /// Appends a frame at time t [s].
+  void write(double t, const Particles& p, const Links& l);
+  std::size_t frames() const { return _times.size(); }
+  void close();
+
+private:
+  void write_xdmf() const;
+  std::filesystem::path _xdmf, _h5;
+  long _file = -1; // hid_t
+  bool _cracks;
+  std::vector<double> _times;
+  std::vector<std::size_t> _broken_count;
+  std::size_t _n;
+  std::vector<int> _initial_links; // per particle
+};
+
+} // namespace dembridge::dem

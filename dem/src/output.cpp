@@ -1,0 +1,151 @@
+#include "dembridge/dem/output.h"
+
+#include <cmath>
+#include <fstream>
+#include <hdf5.h>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+namespace dembridge::dem
+{
+namespace
+{
+void write_dataset(hid_t file, const std::string& name, const void* data, hid_t type,
+                   std::initializer_list<hsize_t> dims)
+{
+  std::vector<hsize_t> d(dims);
+  hid_t space = H5Screate_simple(static_cast<int>(d.size()), d.data(), nullptr);
+  hid_t lcpl = H5Pcreate(H5P_LINK_CREATE);
+  H5Pset_create_intermediate_group(lcpl, 1);
+  hid_t set = H5Dcreate2(file, name.c_str(), type, space, lcpl, H5P_DEFAULT, H5P_DEFAULT);
+  if (set < 0)
+    throw std::runtime_error("HDF5: cannot create dataset " + name);
+  if (d[0] > 0)
+    H5Dwrite(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+  H5Dclose(set);
+  H5Pclose(lcpl);
+  H5Sclose(space);
+}
+} // namespace
+
+ParticleWriter::ParticleWriter(const std::filesystem::path& file, const Links& links,
+                               std::size_t particles, bool cracks)
+    : _xdmf(file), _h5(file), _cracks(cracks), _n(particles)
+{
+  _h5.replace_extension(".h5");
+  if (file.has_parent_path())
+    std::filesystem::create_directories(file.parent_path());
+  _file = H5Fcreate(_h5.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (_file < 0)
+    throw std::runtime_error("cannot create HDF5 file '" + _h5.string() + "'");
+  _initial_links.assign(particles, 0);
+  for (std::size_t k = 0; k < links.size(); ++k)
+  {
+    ++_initial_links[links.a[k]];
+    ++_initial_links[links.b[k]];
+  }
+  write_xdmf();
+}
+
+ParticleWriter::~ParticleWriter() { close(); }
+
+void ParticleWriter::close()
+{
+  if (_file >= 0)
+  {
+    H5Fclose(_file);
+    _file = -1;
+  }
+}
+
+void ParticleWriter::write(double t, const Particles& p, const Links& l)
+{
+  if (_file < 0)
+    throw std::runtime_error("ParticleWriter: file closed");
+  const std::size_t n = p.size(), k = _times.size();
+  const std::string g = "/frame_" + std::to_string(k) + "/";
+  std::vector<double> u(3 * n), damage(n, 0.0);
+  for (std::size_t i = 0; i < 3 * n; ++i)
+    u[i] = p.x[i] - p.x0[i];
+  std::vector<std::int32_t> broken;
+  for (std::size_t q = 0; q < l.size(); ++q)
+    if (l.state[q] != LinkState::intact)
+    {
+      damage[l.a[q]] += 1.0;
+      damage[l.b[q]] += 1.0;
+      broken.push_back(l.a[q]);
+      broken.push_back(l.b[q]);
+    }
+  for (std::size_t i = 0; i < n; ++i)
+    damage[i] = _initial_links[i] > 0 ? damage[i] / _initial_links[i] : 0.0;
+  write_dataset(_file, g + "position", p.x.data(), H5T_NATIVE_DOUBLE, {n, 3});
+  write_dataset(_file, g + "radius", p.r.data(), H5T_NATIVE_DOUBLE, {n});
+  write_dataset(_file, g + "displacement", u.data(), H5T_NATIVE_DOUBLE, {n, 3});
+  write_dataset(_file, g + "velocity", p.v.data(), H5T_NATIVE_DOUBLE, {n, 3});
+  write_dataset(_file, g + "damage", damage.data(), H5T_NATIVE_DOUBLE, {n});
+  if (_cracks)
+    write_dataset(_file, g + "broken_links", broken.data(), H5T_NATIVE_INT32, {broken.size() / 2, 2});
+  H5Fflush(_file, H5F_SCOPE_GLOBAL);
+  _times.push_back(t);
+  _broken_count.push_back(broken.size() / 2);
+  write_xdmf();
+}
+
+void ParticleWriter::write_xdmf() const
+{
+  const std::string h5 = _h5.filename().string();
+  std::ostringstream x;
+  x << std::setprecision(17);
+  x << "<?xml version=\"1.0\"?>\n<Xdmf Version=\"3.0\">\n<Domain>\n"
+    << "<Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+  auto attr = [&](const std::string& name, const std::string& type, std::size_t k, int comps)
+  {
+    x << "  <Attribute Name=\"" << name << "\" AttributeType=\"" << type << "\" Center=\"Node\">\n"
+      << "   <DataItem Dimensions=\"" << _n << (comps > 1 ? " 3" : "")
+      << "\" Format=\"HDF\" NumberType=\"Float\" Precision=\"8\">" << h5 << ":/frame_" << k
+      << "/" << name << "</DataItem>\n  </Attribute>\n";
+  };
+  for (std::size_t k = 0; k < _times.size(); ++k)
+  {
+    x << " <Grid Name=\"particles\" GridType=\"Uniform\">\n  <Time Value=\"" << _times[k] << "\"/>\n"
+      << "  <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << _n << "\"/>\n"
+      << "  <Geometry GeometryType=\"XYZ\">\n   <DataItem Dimensions=\"" << _n
+      << " 3\" Format=\"HDF\" NumberType=\"Float\" Precision=\"8\">" << h5 << ":/frame_" << k
+      << "/position</DataItem>\n  </Geometry>\n";
+    attr("radius", "Scalar", k, 1);
+    attr("displacement", "Vector", k, 3);
+    attr("velocity", "Vector", k, 3);
+    attr("damage", "Scalar", k, 1);
+    x << " </Grid>\n";
+  }
+  x << "</Grid>\n";
+  if (_cracks)
+  {
+    x << "<Grid Name=\"cracks\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    for (std::size_t k = 0; k < _times.size(); ++k)
+    {
+      x << " <Grid Name=\"cracks\" GridType=\"Uniform\">\n  <Time Value=\"" << _times[k] << "\"/>\n";
+      if (_broken_count[k] > 0)
+        x << "  <Topology TopologyType=\"Polyline\" NodesPerElement=\"2\" NumberOfElements=\""
+          << _broken_count[k] << "\">\n   <DataItem Dimensions=\"" << _broken_count[k]
+          << " 2\" Format=\"HDF\" NumberType=\"Int\" Precision=\"4\">" << h5 << ":/frame_" << k
+          << "/broken_links</DataItem>\n  </Topology>\n";
+      else
+        x << "  <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"0\"/>\n";
+      x << "  <Geometry GeometryType=\"XYZ\">\n   <DataItem Dimensions=\"" << _n
+        << " 3\" Format=\"HDF\" NumberType=\"Float\" Precision=\"8\">" << h5 << ":/frame_" << k
+        << "/position</DataItem>\n  </Geometry>\n </Grid>\n";
+    }
+    x << "</Grid>\n";
+  }
+  x << "</Domain>\n</Xdmf>\n";
+  const auto tmp = _xdmf.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << x.str();
+  }
+  std::filesystem::rename(tmp, _xdmf);
+}
+
+} // namespace dembridge::dem

@@ -1,0 +1,291 @@
+#include "sample.h"
+#include "support.h"
+
+#include "dembridge/dem/output.h"
+#include "dembridge/dem/packing.h"
+#include "dembridge/dem/solver.h"
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+namespace dembridge::demo
+{
+using namespace dembridge::dem;
+
+namespace
+{
+/// Least-squares slope of y(x) through the points.
+double slope(const std::vector<double>& x, const std::vector<double>& y)
+{
+  const double n = static_cast<double>(x.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < x.size(); ++i)
+  {
+    sx += x[i];
+    sy += y[i];
+    sxx += x[i] * x[i];
+    sxy += x[i] * y[i];
+  }
+  const double den = n * sxx - sx * sx;
+  return den != 0.0 ? (n * sxy - sx * sy) / den : 0.0;
+}
+} // namespace
+
+nlohmann::json run_sample(const SampleConfig& cfg)
+{
+  Stopwatch clock;
+  if (cfg.shape != "cylinder" && cfg.shape != "prism")
+    throw std::runtime_error("shape '" + cfg.shape + "': allowed are cylinder, prism");
+  if (cfg.test != "tension" && cfg.test != "compression")
+    throw std::runtime_error("test '" + cfg.test + "': allowed are tension, compression");
+  if (!(cfg.diameter > 0.0) || !(cfg.height > 0.0))
+    throw std::runtime_error("sample size: diameter and height must be > 0 m");
+  if (!(cfg.strain_rate > 0.0))
+    throw std::runtime_error("strain rate " + std::to_string(cfg.strain_rate) + " 1/s: must be > 0");
+  if (!(cfg.safety > 0.0 && cfg.safety <= 1.0))
+    throw std::runtime_error("safety factor " + std::to_string(cfg.safety) + ": must be in (0, 1]");
+  if (cfg.dt < 0.0)
+    throw std::runtime_error("time step " + std::to_string(cfg.dt) + " s: must be > 0 (0: automatic)");
+  cfg.material.validate();
+  const double D = cfg.diameter, H = cfg.height;
+  const bool cyl = cfg.shape == "cylinder";
+  const Region region = cyl ? cylinder_region({0.0, 0.0, 0.0}, 0.5 * D, H)
+                            : box_region({0.0, 0.0, 0.0}, {D, D, H});
+  const double area = cyl ? std::numbers::pi * D * D / 4.0 : D * D;
+
+  Packing pk;
+  if (!cfg.packing_file.empty())
+    pk = read_packing(cfg.packing_file);
+  else
+  {
+    PackingOptions po;
+    po.mean_radius = cfg.mean_radius;
+    po.radius_ratio = cfg.radius_ratio;
+    po.seed = cfg.seed;
+    pk = generate_packing(region, po);
+  }
+  double solid = 0.0;
+  for (double r : pk.r)
+    solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  const double fraction = solid / region.volume;
+  Particles p = make_particles(pk.x, pk.r, cfg.material.density, fraction);
+  const double lambda = cfg.lambda > 0.0 ? cfg.lambda
+                                         : lambda_for_mean_links(p.x, p.r, cfg.links_per_sphere);
+  Links links = create_links(p, lambda, cfg.material);
+  const double rmax = *std::max_element(p.r.begin(), p.r.end());
+  const double rmin = *std::min_element(p.r.begin(), p.r.end());
+
+  const double dt_crit = critical_time_step(p, links);
+  if (cfg.dt > dt_crit)
+  {
+    std::ostringstream s;
+    s << "time step " << cfg.dt << " s is above the critical time step " << dt_crit
+      << " s of this sample: use --dt below it, or 0 for " << cfg.safety << " x critical";
+    throw std::runtime_error(s.str());
+  }
+  const double dt = cfg.dt > 0.0 ? cfg.dt : cfg.safety * dt_crit;
+  const double c_wave = std::sqrt(cfg.material.youngs_modulus / cfg.material.density);
+  const double omega1 = std::numbers::pi / (2.0 * H) * c_wave;
+  const double damping = cfg.damping >= 0.0 ? cfg.damping : omega1;
+  const double sign = cfg.test == "tension" ? 1.0 : -1.0;
+  const double max_strain = cfg.max_strain > 0.0 ? cfg.max_strain
+                                                 : (cfg.test == "tension" ? 5e-4 : 5e-3);
+  const double v_top = sign * cfg.strain_rate * H;
+  const double t_ramp = 20.0 * H / c_wave;
+
+  DemSolver solver(p, links, cfg.material, dt, damping, 0.5 * rmin);
+  const double layer = 0.05 * rmax;
+  auto bottom = DemSolver::select(p, [&](const auto& x) { return x[2] < layer + rmax; }, "bottom face");
+  auto top = DemSolver::select(p, [&](const auto& x) { return x[2] > H - layer - rmax; }, "top face");
+  // keep the spheres that touch the faces (centre within r + layer)
+  auto touching = [&](std::vector<std::int32_t> ids, bool low)
+  {
+    std::vector<std::int32_t> out;
+    for (auto i : ids)
+      if (low ? p.x[3 * i + 2] - p.r[i] < layer : p.x[3 * i + 2] + p.r[i] > H - layer)
+        out.push_back(i);
+    if (out.empty())
+      throw std::runtime_error(std::string("no sphere touches the ") + (low ? "bottom" : "top")
+                               + " face: is the packing made for this sample size?");
+    return out;
+  };
+  bottom = touching(bottom, true);
+  top = touching(top, false);
+  solver.add_motion({"bottom", bottom, MotionKind::velocity, {false, false, true},
+                     [](double) { return 0.0; }});
+  solver.add_motion({"top", top, MotionKind::velocity, {false, false, true},
+                     [=](double t) { return v_top * std::min(1.0, t / t_ramp); }});
+  // lateral gauges: spheres on the lateral surface in the middle third
+  std::vector<std::int32_t> gauge;
+  std::vector<std::array<double, 3>> gauge_dir;
+  for (std::size_t i = 0; i < p.size(); ++i)
+  {
+    const double* x = &p.x[3 * i];
+    if (x[2] < H / 3.0 || x[2] > 2.0 * H / 3.0)
+      continue;
+    if (region.sdf({x[0], x[1], x[2]}) + p.r[i] < -layer)
+      continue;
+    std::array<double, 3> dir{0.0, 0.0, 0.0};
+    if (cyl)
+    {
+      const double rr = std::hypot(x[0], x[1]);
+      dir = {x[0] / rr, x[1] / rr, 0.0};
+    }
+    else
+    {
+      // outward normal of the nearest side face
+      const double d[4] = {x[0], D - x[0], x[1], D - x[1]};
+      const int k = static_cast<int>(std::min_element(d, d + 4) - d);
+      dir[k / 2] = k % 2 == 0 ? -1.0 : 1.0;
+    }
+    gauge.push_back(static_cast<std::int32_t>(i));
+    gauge_dir.push_back(dir);
+  }
+  if (gauge.empty())
+    throw std::runtime_error("no sphere on the lateral face at mid-height to measure the lateral strain");
+  const double half_width = 0.5 * D;
+  solver.start();
+
+  nlohmann::json out;
+  out["test"] = cfg.test;
+  out["shape"] = cfg.shape;
+  out["particles"] = p.size();
+  out["links"] = links.size();
+  out["lambda"] = lambda;
+  out["mean_links_per_particle"] = 2.0 * links.size() / p.size();
+  out["packing_fraction"] = fraction;
+  out["dt_s"] = dt;
+  out["dt_critical_s"] = dt_crit;
+  out["damping_per_s"] = damping;
+  out["packing_sweeps"] = pk.sweeps;
+
+  std::unique_ptr<ParticleWriter> writer;
+  std::ofstream csv;
+  if (!cfg.output_dir.empty())
+  {
+    std::filesystem::create_directories(cfg.output_dir);
+    writer = std::make_unique<ParticleWriter>(std::filesystem::path(cfg.output_dir) / "particles.xdmf",
+                                              links, p.size());
+    writer->write(0.0, p, links);
+    csv.open(std::filesystem::path(cfg.output_dir) / "stress_strain.csv");
+    csv << "time_s,strain,stress_pa,lateral_strain,bottom_reaction_n,links_broken_tension,"
+           "links_broken_shear,kinetic_j,elastic_j,softening_j,breakage_j,friction_j,damping_j,"
+           "work_j,imbalance_j\n";
+  }
+  const double t_end = max_strain / cfg.strain_rate + t_ramp / 2.0;
+  const auto nsteps = static_cast<std::int64_t>(std::ceil(t_end / dt));
+  const std::int64_t sample_every = std::max<std::int64_t>(1, nsteps / 2000);
+  const std::int64_t frame_every = std::max<std::int64_t>(1, nsteps / std::max(1, cfg.frames));
+  if (!cfg.quiet)
+    std::cout << p.size() << " spheres, " << links.size() << " links (lambda " << lambda
+              << "), dt " << dt << " s (critical " << dt_crit << "), up to " << nsteps
+              << " steps, damping " << damping << " 1/s\n"
+              << "      strain    stress [Pa]  broken t/s       kinetic [J]     elastic [J]"
+                 "   dissipated [J]      work [J]   imbalance [J]\n";
+
+  std::vector<double> eps, sig, lat;
+  double peak = 0.0, eps_peak = 0.0;
+  bool after_peak = false;
+  auto measure = [&](bool print, bool frame)
+  {
+    double u_top = 0.0;
+    for (auto i : top)
+      u_top += p.x[3 * i + 2] - p.x0[3 * i + 2];
+    u_top /= top.size();
+    double u_bot = 0.0;
+    for (auto i : bottom)
+      u_bot += p.x[3 * i + 2] - p.x0[3 * i + 2];
+    u_bot /= bottom.size();
+    const double strain = (u_top - u_bot) / H;
+    const double stress = solver.reaction("top")[2] / area;
+    double ul = 0.0;
+    for (std::size_t g = 0; g < gauge.size(); ++g)
+      for (int k = 0; k < 3; ++k)
+        ul += (p.x[3 * gauge[g] + k] - p.x0[3 * gauge[g] + k]) * gauge_dir[g][k];
+    const double lateral = ul / gauge.size() / half_width;
+    eps.push_back(strain);
+    sig.push_back(stress);
+    lat.push_back(lateral);
+    if (std::abs(stress) > peak)
+    {
+      peak = std::abs(stress);
+      eps_peak = std::abs(strain);
+    }
+    else if (peak > 0.0 && std::abs(stress) < cfg.stop_ratio * peak)
+      after_peak = true;
+    if (csv.is_open() || print)
+    {
+      const auto e = solver.energy();
+      const auto bt = links.count(LinkState::broken_tension), bs = links.count(LinkState::broken_shear);
+      if (csv.is_open())
+        csv << solver.time() << ',' << strain << ',' << stress << ',' << lateral << ','
+            << solver.reaction("bottom")[2] << ',' << bt << ',' << bs << ',' << e.kinetic << ','
+            << e.elastic << ',' << e.softening << ',' << e.breakage << ',' << e.friction << ','
+            << e.damping << ',' << e.external_work + e.prescribed_work << ',' << e.imbalance()
+            << '\n';
+      if (print && !cfg.quiet)
+        std::cout << std::scientific << std::setprecision(4) << std::setw(12) << strain
+                  << std::setw(15) << stress << std::setw(7) << bt << "/" << std::left
+                  << std::setw(6) << bs << std::right << std::setw(16) << e.kinetic
+                  << std::setw(16) << e.elastic << std::setw(16)
+                  << e.softening + e.breakage + e.friction + e.damping << std::setw(16)
+                  << e.external_work + e.prescribed_work << std::setw(16) << e.imbalance()
+                  << std::defaultfloat << "\n";
+    }
+    if (frame && writer)
+      writer->write(solver.time(), p, links);
+  };
+  const std::int64_t print_every = std::max<std::int64_t>(1, nsteps / 20);
+  std::int64_t s = 0;
+  for (s = 1; s <= nsteps && !after_peak; ++s)
+  {
+    solver.step();
+    if (s % sample_every == 0 || s % frame_every == 0)
+      measure(s % print_every == 0, s % frame_every == 0);
+  }
+  measure(true, true);
+  if (writer)
+    writer->close();
+
+  // Elastic moduli from the initial part: points with |stress| between 5 %
+  // and 30 % of the peak, before the peak.
+  std::vector<double> e1, s1, l1;
+  for (std::size_t i = 0; i < eps.size(); ++i)
+  {
+    if (std::abs(eps[i]) > eps_peak)
+      break;
+    if (std::abs(sig[i]) >= 0.05 * peak && std::abs(sig[i]) <= 0.3 * peak)
+    {
+      e1.push_back(eps[i]);
+      s1.push_back(sig[i]);
+      l1.push_back(lat[i]);
+    }
+  }
+  const double E = e1.size() >= 3 ? slope(e1, s1) : 0.0;
+  const double nu = e1.size() >= 3 ? -slope(e1, l1) : 0.0;
+  out["youngs_modulus_pa"] = E;
+  out["poisson_ratio"] = nu;
+  out["peak_stress_pa"] = peak;
+  out["strain_at_peak"] = eps_peak;
+  out["final_strain"] = eps.back();
+  out["links_broken_tension"] = links.count(LinkState::broken_tension);
+  out["links_broken_shear"] = links.count(LinkState::broken_shear);
+  const auto e = solver.energy();
+  out["energy"] = {{"kinetic_j", e.kinetic},       {"elastic_j", e.elastic},
+                   {"softening_j", e.softening},   {"breakage_j", e.breakage},
+                   {"friction_j", e.friction},     {"damping_j", e.damping},
+                   {"work_j", e.external_work + e.prescribed_work}, {"imbalance_j", e.imbalance()}};
+  out["steps"] = solver.steps();
+  out["reached_peak"] = after_peak;
+  out["wall_s"] = clock.seconds();
+  if (writer)
+    out["frames"] = writer->frames();
+  return out;
+}
+
+} // namespace dembridge::demo

@@ -1,0 +1,50 @@
+#pragma once
+/// @file sample.h
+/// Quasi-static uniaxial tension or compression of a DE sample (cylinder or
+/// square prism), as a function the dem_sample demo, the tests and the
+/// calibration share. The bottom layer of spheres is held axially, the top
+/// layer moves axially at a constant strain rate (ramped in over 20 wave
+/// transits); both are free laterally (frictionless platens). Stress is the
+/// top reaction over the section, strain the platens' displacement over the
+/// height, lateral strain from the spheres at mid-height on the lateral face.
+
+#include "dembridge/dem/assembly.h"
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace dembridge::demo
+{
+
+struct SampleConfig
+{
+  std::string shape = "cylinder";   ///< cylinder | prism
+  double diameter = 0.05;           ///< cylinder diameter or prism side [m]
+  double height = 0.1;              ///< [m]
+  double mean_radius = 2.5e-3;      ///< [m]
+  double radius_ratio = 2.0;        ///< Rmax / Rmin
+  unsigned seed = 1;
+  std::string packing_file;         ///< x y z r file instead of generating
+  double lambda = 0.0;              ///< interaction range; 0 = from links_per_sphere
+  double links_per_sphere = 12.0;
+  dem::Material material;
+  std::string test = "tension";     ///< tension | compression
+  double strain_rate = 0.1;         ///< [1/s], > 0
+  double max_strain = 0.0;          ///< stop at this strain; 0 = 5e-4 tension, 5e-3 compression
+  double stop_ratio = 0.5;          ///< stop when |stress| falls below this x peak after the peak
+  double damping = -1.0;            ///< [1/s]; < 0 = first axial circular frequency of the sample
+  double dt = 0.0;                  ///< [s]; 0 = safety x critical
+  double safety = 0.9;
+  std::string output_dir;           ///< "" = no files
+  int frames = 100;                 ///< XDMF frames if the run goes to max_strain
+  bool quiet = false;
+};
+
+/// Runs the test; returns the summary (particles, links,
+/// mean_links_per_particle, packing_fraction, youngs_modulus_pa,
+/// poisson_ratio, peak_stress_pa, strain_at_peak, links_broken_tension,
+/// links_broken_shear, wall_s, ...). Writes DIR/stress_strain.csv and
+/// DIR/particles.xdmf with an output folder.
+nlohmann::json run_sample(const SampleConfig& cfg);
+
+} // namespace dembridge::demo

@@ -1,0 +1,109 @@
+// The DE sample test procedure (demos/dem_sample) on a small sample.
+#include "sample.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+using namespace dembridge;
+using Catch::Contains;
+using Catch::Matchers::WithinRel;
+
+namespace
+{
+demo::SampleConfig small(const std::string& test)
+{
+  demo::SampleConfig c;
+  c.test = test;
+  c.mean_radius = 0.004; // ~400 spheres
+  c.quiet = true;
+  return c;
+}
+} // namespace
+
+TEST_CASE("tension sample: peak, breakage, energy budget, XDMF and CSV", "[dem][sample]")
+{
+  auto c = small("tension");
+  const auto dir = std::filesystem::temp_directory_path() / "dembridge_sample";
+  std::filesystem::remove_all(dir);
+  c.output_dir = dir.string();
+  const auto r = demo::run_sample(c);
+  INFO(r.dump());
+  CHECK(r["reached_peak"].get<bool>());
+  CHECK(r["peak_stress_pa"].get<double>() > 0.0);
+  CHECK(r["links_broken_tension"].get<std::size_t>() + r["links_broken_shear"].get<std::size_t>() > 0);
+  CHECK_THAT(r["mean_links_per_particle"].get<double>(), WithinRel(12.0, 0.01));
+  // Energy budget closes: work = kinetic + elastic + dissipated, up to the
+  // O(dt) error of the reaction work and the breakage accounting (2 %).
+  const auto e = r["energy"];
+  CHECK(std::abs(e["imbalance_j"].get<double>()) < 0.02 * e["work_j"].get<double>());
+  CHECK(std::filesystem::exists(dir / "particles.xdmf"));
+  CHECK(std::filesystem::exists(dir / "particles.h5"));
+  CHECK(r["frames"].get<std::size_t>() >= 2);
+  // CSV: quasi-static loading before damage spreads (below 80 % of the
+  // peak, after the ramp): the bottom platen carries the same force as the
+  // top one within 2 % of the peak force (inertia rho V a and damping
+  // c m v are both far below that at this rate; near the peak, breakage
+  // makes the response dynamic)
+  std::ifstream csv(dir / "stress_strain.csv");
+  std::string line;
+  std::getline(csv, line);
+  const double area = M_PI * 0.05 * 0.05 / 4;
+  const double peak_force = r["peak_stress_pa"].get<double>() * area;
+  int rows = 0;
+  while (std::getline(csv, line))
+  {
+    double t, strain, stress, lat, bottom;
+    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf,%lf", &t, &strain, &stress, &lat, &bottom) != 5)
+      FAIL("bad CSV line " << line);
+    if (std::abs(strain) < r["strain_at_peak"].get<double>() && t > 2e-4
+        && std::abs(stress) < 0.8 * r["peak_stress_pa"].get<double>())
+      CHECK(std::abs(stress * area + bottom) < 0.02 * peak_force);
+    ++rows;
+  }
+  CHECK(rows > 10);
+}
+
+TEST_CASE("sample stiffness scales with E of equation [1]", "[dem][sample]")
+{
+  // The elastic response is linear in the link stiffnesses, which are
+  // proportional to E: doubling E doubles the sample's modulus. The two runs
+  // see different rates of the same quasi-static loading, so allow 2 %.
+  auto a = small("compression");
+  a.max_strain = 1e-4; // elastic range
+  auto b = a;
+  b.material.youngs_modulus *= 2.0;
+  b.material.tensile *= 2.0;
+  b.material.cohesion *= 2.0;
+  const auto ra = demo::run_sample(a), rb = demo::run_sample(b);
+  CHECK(ra["links_broken_shear"].get<std::size_t>() == 0);
+  CHECK_THAT(rb["youngs_modulus_pa"].get<double>(),
+             WithinRel(2.0 * ra["youngs_modulus_pa"].get<double>(), 0.02));
+}
+
+TEST_CASE("compression sample breaks mostly in shear and is stronger than in tension", "[dem][sample]")
+{
+  const auto t = demo::run_sample(small("tension"));
+  const auto c = demo::run_sample(small("compression"));
+  INFO(c.dump());
+  CHECK(c["reached_peak"].get<bool>());
+  CHECK(c["peak_stress_pa"].get<double>() > 1.5 * t["peak_stress_pa"].get<double>());
+  CHECK(c["links_broken_shear"].get<std::size_t>() > c["links_broken_tension"].get<std::size_t>());
+}
+
+TEST_CASE("sample bad input", "[dem][sample][errors]")
+{
+  auto c = small("torsion");
+  CHECK_THROWS_WITH(demo::run_sample(c), Contains("torsion") && Contains("tension"));
+  c = small("tension");
+  c.dt = 1.0;
+  CHECK_THROWS_WITH(demo::run_sample(c), Contains("above the critical time step"));
+  c = small("tension");
+  c.lambda = 0.8;
+  CHECK_THROWS_WITH(demo::run_sample(c), Contains("lambda"));
+  c = small("tension");
+  c.material.phi_i_deg = 95.0;
+  CHECK_THROWS_WITH(demo::run_sample(c), Contains("phi_i"));
+}
