@@ -106,15 +106,34 @@ TEST_CASE("torques: magnitude R |F_s|, direction -n x F_s", "[dem][law]")
   CHECK(t[0][0] == 0.0);
 }
 
-TEST_CASE("shear rotation keeps the magnitude and follows the normal", "[dem][law]")
+TEST_CASE("shear kinematics: rigid rotations give no shear, the force turns with the pair",
+          "[dem][law]")
 {
-  const double a = 0.3;
-  const Vec3 n0{1, 0, 0}, n1{std::cos(a), std::sin(a), 0}, fs{0, 5.0, 1.0};
-  const auto r = rotate_shear(fs, n0, n1, 0.0);
-  CHECK_THAT(norm(r), WithinRel(norm(fs), 1e-14));
-  CHECK(std::abs(r[0] * n1[0] + r[1] * n1[1] + r[2] * n1[2]) < 1e-14); // in the new plane
-  CHECK_THAT(r[1], WithinRel(5.0 * std::cos(a), 1e-14));
-  // twist about the normal
-  const auto q = rotate_shear({0, 1, 0}, n0, n0, std::numbers::pi / 2);
-  CHECK(std::abs(q[2] - 1.0) < 1e-14);
+  // a finite rigid rotation (0.3 rad about an oblique axis) of the pair and
+  // both spheres: no shear increment, and the stored force turns exactly
+  const Vec3 axis{0.3, -0.5, 0.8};
+  const double an = norm(axis);
+  const Vec3 th{0.3 * axis[0] / an, 0.3 * axis[1] / an, 0.3 * axis[2] / an};
+  const Vec3 n0{1.0, 0.0, 0.0};
+  const Vec3 n1 = rotate(th, n0);
+  CHECK(std::abs(norm(n1) - 1.0) < 1e-15);
+  const Mat3 R = rotation_matrix(th);
+  CHECK(norm(shear_increment(n0, n1, R, R, 2e-3, 0.4)) < 1e-18);
+  const Vec3 fs{0.0, 3.0, -1.0};
+  const Vec3 f1 = rotate_shear(fs, R, R, 0.4, n1), expect = rotate(th, fs);
+  for (int i = 0; i < 3; ++i)
+    CHECK(std::abs(f1[i] - expect[i]) < 1e-14);
+  // b displaced tangentially by delta (no spin): du_s = delta to first order
+  const double D = 2e-3, delta = 1e-8;
+  Vec3 n2{D, delta, 0.0};
+  const double l2 = norm(n2);
+  for (auto& c : n2)
+    c /= l2;
+  const Mat3 I = rotation_matrix({0, 0, 0});
+  const Vec3 t = shear_increment(n0, n2, I, I, l2, 0.5);
+  CHECK(std::abs(t[1] - delta) < 1e-6 * delta);
+  // sphere a spinning by w about z (no branch motion): the contact point of a
+  // moves by +l_a w along y, so b moves by -l_a w relative to it
+  const Vec3 u = shear_increment(n0, n0, rotation_matrix({0, 0, 1e-6}), I, D, 0.5);
+  CHECK(std::abs(u[1] + 0.5 * D * 1e-6) < 1e-9 * D * 1e-6);
 }

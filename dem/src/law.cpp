@@ -13,16 +13,6 @@ inline Vec3 cross(const Vec3& a, const Vec3& b)
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
 inline double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
-/// Rodrigues rotation of v about unit axis k by the angle with cos c, sin s.
-inline Vec3 rotate(const Vec3& v, const Vec3& k, double c, double s)
-{
-  const Vec3 kxv = cross(k, v);
-  const double kv = dot(k, v);
-  Vec3 r;
-  for (int i = 0; i < 3; ++i)
-    r[i] = v[i] * c + kxv[i] * s + k[i] * kv * (1.0 - c);
-  return r;
-}
 } // namespace
 
 double link_envelope(double d, const LinkLaw& p)
@@ -67,96 +57,65 @@ double softening_dissipation(double delta_max, const LinkLaw& p)
   return work - 0.5 * f_dm * dm;
 }
 
-Vec3 rotate_shear(const Vec3& fs, const Vec3& n_old, const Vec3& n_new, double twist)
+Vec3 rotate(const Vec3& th, const Vec3& v)
 {
-  Vec3 r = fs;
-  Vec3 axis = cross(n_old, n_new);
-  const double s = norm(axis);
-  if (s > 1e-300)
+  const double a2 = dot(th, th);
+  double sa, ca; // sin(a)/a and (1 - cos a)/a^2
+  if (a2 < 1e-4)
   {
-    for (auto& a : axis)
-      a /= s;
-    const double c = dot(n_old, n_new);
-    r = rotate(r, axis, c, s);
+    // series: next terms below 1e-19 for a < 1e-2
+    sa = 1.0 - a2 / 6.0 + a2 * a2 / 120.0 - a2 * a2 * a2 / 5040.0;
+    ca = 0.5 - a2 / 24.0 + a2 * a2 / 720.0 - a2 * a2 * a2 / 40320.0;
   }
-  if (twist != 0.0)
-    r = rotate(r, n_new, std::cos(twist), std::sin(twist));
-  return r;
+  else
+  {
+    const double a = std::sqrt(a2);
+    sa = std::sin(a) / a;
+    ca = (1.0 - std::cos(a)) / a2;
+  }
+  const Vec3 t = cross(th, v);
+  const Vec3 tt = cross(th, t);
+  return {v[0] + sa * t[0] + ca * tt[0], v[1] + sa * t[1] + ca * tt[1],
+          v[2] + sa * t[2] + ca * tt[2]};
+}
+
+Mat3 rotation_matrix(const Vec3& th)
+{
+  const Vec3 ex = rotate(th, {1.0, 0.0, 0.0}), ey = rotate(th, {0.0, 1.0, 0.0}),
+             ez = rotate(th, {0.0, 0.0, 1.0});
+  return {ex[0], ey[0], ez[0], ex[1], ey[1], ez[1], ex[2], ey[2], ez[2]};
 }
 
 namespace
 {
-using Quat = std::array<double, 4>;
-inline Quat qmul(const Quat& a, const Quat& b)
+inline Vec3 mul(const Mat3& r, const Vec3& v)
 {
-  return {a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
-          a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
-          a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
-          a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]};
-}
-inline Quat from_rotvec(const Vec3& v)
-{
-  const double a = norm(v);
-  if (a < 1e-30)
-    return {1.0, 0.5 * v[0], 0.5 * v[1], 0.5 * v[2]};
-  const double s = std::sin(0.5 * a) / a;
-  return {std::cos(0.5 * a), s * v[0], s * v[1], s * v[2]};
-}
-inline Vec3 to_rotvec(const Quat& q)
-{
-  const double s = std::sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  if (s < 1e-30)
-    return {2.0 * q[1], 2.0 * q[2], 2.0 * q[3]};
-  const double a = 2.0 * std::atan2(s, q[0]) / s;
-  return {a * q[1], a * q[2], a * q[3]};
-}
-/// Minimal rotation taking unit a to unit b (half-angle form).
-inline Quat between(const Vec3& a, const Vec3& b)
-{
-  const Vec3 c = cross(a, b);
-  Quat q{1.0 + dot(a, b), c[0], c[1], c[2]};
-  const double l = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  if (l < 1e-150) // antiparallel: any perpendicular axis
-    return {0.0, 1.0, 0.0, 0.0};
-  for (auto& x : q)
-    x /= l;
-  return q;
+  return {r[0] * v[0] + r[1] * v[1] + r[2] * v[2], r[3] * v[0] + r[4] * v[1] + r[5] * v[2],
+          r[6] * v[0] + r[7] * v[1] + r[8] * v[2]};
 }
 } // namespace
 
-Vec3 rotate(const std::array<double, 4>& q, const Vec3& v)
+Vec3 shear_increment(const Vec3& n_old, const Vec3& n_new, const Mat3& ra, const Mat3& rb,
+                     double d, double fa)
 {
-  // v' = v + 2 w (u x v) + 2 u x (u x v), u = (x, y, z)
-  const Vec3 u{q[1], q[2], q[3]};
-  const Vec3 t = cross(u, v);
-  const Vec3 t2 = cross(u, t);
-  return {v[0] + 2.0 * (q[0] * t[0] + t2[0]), v[1] + 2.0 * (q[0] * t[1] + t2[1]),
-          v[2] + 2.0 * (q[0] * t[2] + t2[2])};
+  const Vec3 ma = mul(ra, n_old), mb = mul(rb, n_old);
+  const double fb = 1.0 - fa;
+  const double pa = dot(ma, n_new), pb = dot(mb, n_new);
+  Vec3 du;
+  for (int k = 0; k < 3; ++k)
+    du[k] = -d * (fa * (ma[k] - pa * n_new[k]) + fb * (mb[k] - pb * n_new[k]));
+  return du;
 }
 
-ShearKinematics shear_kinematics(const Vec3& n_old, const Vec3& n_new, const Vec3& dtheta_a,
-                                 const Vec3& dtheta_b, double d, double fa)
+Vec3 rotate_shear(const Vec3& fs, const Mat3& ra, const Mat3& rb, double fa, const Vec3& n_new)
 {
-  const Quat qm = between(n_old, n_new);
-  const Quat qmc{qm[0], -qm[1], -qm[2], -qm[3]};
-  const Vec3 ra = to_rotvec(qmul(qmc, from_rotvec(dtheta_a)));
-  const Vec3 rb = to_rotvec(qmul(qmc, from_rotvec(dtheta_b)));
-  const double ta = dot(ra, n_old), tb = dot(rb, n_old);
-  Vec3 tilt;
+  const Vec3 a = mul(ra, fs), b = mul(rb, fs);
+  const double fb = 1.0 - fa;
+  Vec3 r{fa * a[0] + fb * b[0], fa * a[1] + fb * b[1], fa * a[2] + fb * b[2]};
+  const double rn = dot(r, n_new);
   for (int k = 0; k < 3; ++k)
-    tilt[k] = fa * (ra[k] - ta * n_old[k]) + (1.0 - fa) * (rb[k] - tb * n_old[k]);
-  const Vec3 c = cross(tilt, n_old);
-  const Vec3 du_old{-d * c[0], -d * c[1], -d * c[2]};
-  ShearKinematics out;
-  out.du_s = rotate(qm, du_old);
-  // project away round-off normal components
-  const double dn = dot(out.du_s, n_new);
-  for (int k = 0; k < 3; ++k)
-    out.du_s[k] -= dn * n_new[k];
-  const double tw = fa * ta + (1.0 - fa) * tb;
-  const Quat qt = from_rotvec({tw * n_new[0], tw * n_new[1], tw * n_new[2]});
-  out.q = qmul(qt, qm);
-  return out;
+    r[k] -= rn * n_new[k];
+  return r;
 }
 
 ShearForce link_shear_force(const Vec3& fs, const Vec3& du_s, double fn, const LinkLaw& p)

@@ -26,23 +26,6 @@ ContactFactors contact_factors(const Material& m)
   return {k.kn / m.youngs_modulus, k.ks / k.kn};
 }
 
-/// Objective shear kinematics of the pair (i, j) over dt: the branch at
-/// mid-step gives the lever length; the rotation increments are omega dt.
-inline ShearKinematics kinematics(const Particles& p, std::int32_t i, std::int32_t j,
-                                  const double* n_old, const double* n, double dt)
-{
-  const double* vi = &p.v[3 * i];
-  const double* vj = &p.v[3 * j];
-  double d[3];
-  for (int k = 0; k < 3; ++k)
-    d[k] = (p.x[3 * j + k] - p.x[3 * i + k]) - 0.5 * dt * (vj[k] - vi[k]);
-  const double D = std::sqrt(dot3(d, d));
-  const double fa = p.r[i] / (p.r[i] + p.r[j]);
-  return shear_kinematics({n_old[0], n_old[1], n_old[2]}, {n[0], n[1], n[2]},
-                          {p.w[3 * i] * dt, p.w[3 * i + 1] * dt, p.w[3 * i + 2] * dt},
-                          {p.w[3 * j] * dt, p.w[3 * j + 1] * dt, p.w[3 * j + 2] * dt}, D, fa);
-}
-
 inline void apply(Particles& p, std::int32_t i, std::int32_t j, const double* n, double fn,
                   const Vec3& fs, double la, double lb)
 {
@@ -61,6 +44,26 @@ inline void apply(Particles& p, std::int32_t i, std::int32_t j, const double* n,
 void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
                     ForceCounters& c)
 {
+  std::vector<double> rot;
+  compute_forces(p, l, nl, mat, dt, c, rot);
+}
+
+void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
+                    ForceCounters& c, std::vector<double>& rot)
+{
+  // each sphere's rotation over the step, once
+  rot.resize(9 * p.size());
+  for (std::size_t i = 0; i < p.size(); ++i)
+  {
+    const Mat3 r = rotation_matrix({p.w[3 * i] * dt, p.w[3 * i + 1] * dt, p.w[3 * i + 2] * dt});
+    std::copy(r.begin(), r.end(), rot.begin() + 9 * i);
+  }
+  auto R = [&](std::int32_t i)
+  {
+    Mat3 r;
+    std::copy(rot.begin() + 9 * i, rot.begin() + 9 * i + 9, r.begin());
+    return r;
+  };
   std::fill(p.f.begin(), p.f.end(), 0.0);
   std::fill(p.t.begin(), p.t.end(), 0.0);
   const LinkLaw base = mat.law(1.0, 1.0, 1.0);
@@ -94,9 +97,12 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     }
     l.delta_max[k] = nf.delta_max;
     const double la = D * p.r[i] / (p.r[i] + p.r[j]), lb = D - la;
-    const ShearKinematics kin = kinematics(p, i, j, &l.n[3 * k], n, dt);
-    const Vec3 fs_rot = rotate(kin.q, {fs_old[0], fs_old[1], fs_old[2]});
-    const ShearForce sf = link_shear_force(fs_rot, kin.du_s, nf.fn, law);
+    const Mat3 ra = R(i), rb = R(j);
+    const double fa = p.r[i] / (p.r[i] + p.r[j]);
+    const Vec3 nn{n[0], n[1], n[2]};
+    const Vec3 du_s = shear_increment({l.n[3 * k], l.n[3 * k + 1], l.n[3 * k + 2]}, nn, ra, rb, D, fa);
+    const Vec3 fs_rot = rotate_shear({fs_old[0], fs_old[1], fs_old[2]}, ra, rb, fa, nn);
+    const ShearForce sf = link_shear_force(fs_rot, du_s, nf.fn, law);
     if (sf.exceeded)
     {
       // Mohr-Coulomb reached: the link breaks and its elastic energy is
@@ -144,11 +150,14 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     const double fn = contact_normal_force(D, rs, law.kn);
     const double la = D * p.r[i] / rs, lb = D - la;
     const double* n_old = nl.touching[q] ? &nl.n[3 * q] : n;
-    const ShearKinematics kin = kinematics(p, i, j, n_old, n, dt);
+    const Mat3 ra = R(i), rb = R(j);
+    const double fa = p.r[i] / rs;
+    const Vec3 nn{n[0], n[1], n[2]};
+    const Vec3 du_s = shear_increment({n_old[0], n_old[1], n_old[2]}, nn, ra, rb, D, fa);
     Vec3 fs_rot{0.0, 0.0, 0.0};
     if (nl.touching[q])
-      fs_rot = rotate(kin.q, {fs_old[0], fs_old[1], fs_old[2]});
-    const ShearForce sf = contact_shear_force(fs_rot, kin.du_s, fn, law);
+      fs_rot = rotate_shear({fs_old[0], fs_old[1], fs_old[2]}, ra, rb, fa, nn);
+    const ShearForce sf = contact_shear_force(fs_rot, du_s, fn, law);
     c.friction += sf.slip_energy;
     for (int k = 0; k < 3; ++k)
     {
@@ -389,7 +398,7 @@ void DemSolver::step()
       w_damp += dt * _c * (_p.m[i] * vh * vh + _p.inertia[i] * _p.w[3 * i + k] * _p.w[3 * i + k]);
     }
   _nl.update(_p.x, _p.r, _l.a, _l.b);
-  compute_forces(_p, _l, _nl, _mat, dt, _counters);
+  compute_forces(_p, _l, _nl, _mat, dt, _counters, _rot);
   // reactions on held translations: m (v_new - v_old) = dt/2 (F_old + F_new) + dt R
   double w_presc = 0.0;
   for (std::size_t i = 0; i < n; ++i)

@@ -11,6 +11,7 @@ namespace dembridge::dem
 {
 
 using Vec3 = std::array<double, 3>;
+using Mat3 = std::array<double, 9>; ///< row-major 3 x 3
 
 /// Parameters of one cohesive link (or contact), from equation [1] and the
 /// local strengths.
@@ -59,33 +60,30 @@ double link_envelope(double d, const LinkLaw& p);
 /// still stores, 0 while elastic, S_int T delta_r / 2 at rupture [J].
 double softening_dissipation(double delta_max, const LinkLaw& p);
 
-/// Objective shear kinematics of a pair over one step.
-struct ShearKinematics
-{
-  Vec3 du_s;   ///< tangential relative displacement increment of b w.r.t. a, in the new tangent plane [m]
-  std::array<double, 4> q;  ///< unit quaternion (w, x, y, z) carrying a stored shear force to the new step
-};
+/// Rotation of v by the rotation vector theta (Rodrigues, exact; series for
+/// small angles, accurate to round-off).
+Vec3 rotate(const Vec3& theta, const Vec3& v);
 
-/// The part of the spheres' rotation increments dtheta_a, dtheta_b [rad]
-/// that the branch (line of centres, n_old -> n_new) does not share makes the
-/// shear: with q_min the minimal rotation n_old -> n_new, each sphere's
-/// relative rotation Q = conj(q_min) (x) q(dtheta) is split into a twist about
-/// n_old and a tilt; du_s = -D (f_a tilt_a + (1 - f_a) tilt_b) x n_old,
-/// carried to the new plane by q_min. A stored force turns by q_min and the
-/// mean twist. Finite rotations throughout: any rigid motion gives du_s = 0
-/// and turns the force with the pair, both to round-off.
-/// @param d branch length at mid-step [m]; @param fa = R_a / (R_a + R_b)
-ShearKinematics shear_kinematics(const Vec3& n_old, const Vec3& n_new, const Vec3& dtheta_a,
-                                 const Vec3& dtheta_b, double d, double fa);
+/// The rotation matrix of the rotation vector theta (same formula).
+Mat3 rotation_matrix(const Vec3& theta);
 
-/// Rotates v by the unit quaternion q = (w, x, y, z).
-Vec3 rotate(const std::array<double, 4>& q, const Vec3& v);
+/// Each sphere carries the old contact normal with its own rotation over
+/// the step, m = R n_old; the material points of the contact then sit at
+/// l_a m_a and -l_b m_b, while the branch says l_a n_new and -l_b n_new. The
+/// tangential (w.r.t. n_new) mismatch is the shear increment of b w.r.t. a:
+///   du_s = -D (f_a (m_a)_t + (1 - f_a) (m_b)_t),  l_a = f_a D.
+/// For any rigid motion (same rotation for both spheres and the branch)
+/// m_a = m_b = n_new and du_s = 0 to round-off (objectivity); for small
+/// rotations it is the classical relative velocity at the contact point
+/// times dt. @param ra, rb rotations of a and b over the step;
+/// @param d branch length [m]; @param fa = R_a / (R_a + R_b)
+Vec3 shear_increment(const Vec3& n_old, const Vec3& n_new, const Mat3& ra, const Mat3& rb,
+                     double d, double fa);
 
-/// Rotates a stored shear force into the tangent plane of the new normal:
-/// first the rotation that takes n_old to n_new (about n_old x n_new), then a
-/// rotation about n_new by `twist` [rad] (the pair's mean spin about the
-/// normal times dt). Keeps |fs| for a shear force lying in the old plane.
-Vec3 rotate_shear(const Vec3& fs, const Vec3& n_old, const Vec3& n_new, double twist);
+/// Carries a stored shear force over the step: turned by f_a R_a + f_b R_b
+/// (the pair's rotation), then projected on the tangent plane of n_new; a
+/// rigid motion turns it exactly with the pair.
+Vec3 rotate_shear(const Vec3& fs, const Mat3& ra, const Mat3& rb, double fa, const Vec3& n_new);
 
 /// Result of the shear law.
 struct ShearForce

@@ -23,9 +23,13 @@ struct ForceCounters
 };
 
 /// Computes forces and torques on all particles from the intact links and
-/// the contacts, using p.v and p.w as the velocities over the step (for the
-/// incremental shear). Updates link and contact history, breaks links.
-/// Forces are zeroed first.
+/// the contacts, using p.w as the angular velocity over the step (the
+/// spheres' rotations R = exp(omega dt), for the incremental shear). Updates
+/// link and contact history, breaks links. Forces are zeroed first.
+/// @param rotations scratch space (9 per particle), reused between calls
+void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
+                    ForceCounters& c, std::vector<double>& rotations);
+/// Same, with its own scratch space.
 void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
                     ForceCounters& c);
 
@@ -121,7 +125,7 @@ private:
   std::vector<ParticleMotion> _motions;
   std::vector<ParticleForce> _forces;
   std::vector<std::uint8_t> _held;      // per particle and component: 1 if prescribed
-  std::vector<double> _fext, _reac, _fold;
+  std::vector<double> _fext, _reac, _fold, _rot;
   double _dt, _c, _t = 0.0;
   std::int64_t _steps = 0;
   DemEnergy _e;

@@ -1,0 +1,131 @@
+// dem_throughput: speed of the DEM step on a bonded cube.
+//
+// For each size it generates a packing of a cube (timing the generator),
+// bonds it (12 links per sphere), holds the bottom face and pulls the top one
+// slowly (links stay elastic: strengths set very high), with contact
+// detection on, and times `--steps` steps. Prints ns per link-step and per
+// particle-step, bytes per link (spheres, links and neighbour pairs
+// included), the thread count (OMP_NUM_THREADS) and the generator's spheres
+// per second.
+//
+// Sample runs:
+//   build/bin/dem_throughput --particles 10000 50000 --summary out/dem_throughput.json
+//   OMP_NUM_THREADS=1 build/bin/dem_throughput --packing my_spheres.txt
+#include "dembridge/dem/packing.h"
+#include "dembridge/dem/solver.h"
+#include "support.h"
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <iostream>
+#include <numbers>
+#include <omp.h>
+
+namespace
+{
+template <typename T>
+std::size_t bytes(const std::vector<T>& v)
+{
+  return v.capacity() * sizeof(T);
+}
+} // namespace
+
+int main(int argc, char** argv)
+{
+  using namespace dembridge;
+  std::vector<long> sizes{10000, 50000};
+  int steps = 200;
+  std::string packing_file, output, summary;
+  CLI::App app{"DEM step throughput on a bonded cube", "dem_throughput"};
+  app.add_option("--particles", sizes, "numbers of spheres (one run each)")->capture_default_str();
+  app.add_option("--packing", packing_file, "use this 'x y z r' packing [m] instead of generating");
+  app.add_option("--steps", steps, "timed steps per size")->capture_default_str();
+  app.add_option("--output", output, "output folder (unused: only the summary is written)");
+  app.add_option("--summary", summary, "JSON file with the figures");
+  CLI11_PARSE(app, argc, argv);
+
+  return demo::run_guarded(argc, argv, [&]
+  {
+    demo::echo_options(app);
+    if (steps < 1)
+      throw std::runtime_error("--steps " + std::to_string(steps) + ": must be >= 1");
+    nlohmann::json cases = nlohmann::json::array();
+    const int threads = omp_get_max_threads();
+    std::cout << "  particles      links  threads  ns/link-step  ns/particle-step  bytes/link  "
+                 "packing spheres/s\n";
+    const std::size_t runs = packing_file.empty() ? sizes.size() : 1;
+    for (std::size_t run = 0; run < runs; ++run)
+    {
+      dem::Packing pk;
+      double pack_rate = 0.0;
+      double side = 0.0;
+      if (!packing_file.empty())
+      {
+        pk = dem::read_packing(packing_file);
+        double lo = 1e300, hi = -1e300;
+        for (std::size_t i = 0; i < pk.size(); ++i)
+        {
+          lo = std::min(lo, pk.x[3 * i + 2] - pk.r[i]);
+          hi = std::max(hi, pk.x[3 * i + 2] + pk.r[i]);
+        }
+        side = hi - lo;
+        for (std::size_t i = 0; i < pk.size(); ++i)
+          pk.x[3 * i + 2] -= lo;
+      }
+      else
+      {
+        side = 0.1;
+        dem::PackingOptions po;
+        po.count = static_cast<std::size_t>(sizes[run]);
+        demo::Stopwatch t;
+        pk = dem::generate_packing(dem::box_region({0, 0, 0}, {side, side, side}), po);
+        pack_rate = pk.size() / t.seconds();
+      }
+      double solid = 0.0;
+      for (double r : pk.r)
+        solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+      dem::Material mat;
+      mat.tensile = mat.cohesion = 1e12; // elastic links
+      auto p = dem::make_particles(pk.x, pk.r, mat.density, solid / std::pow(side, 3));
+      const double lambda = dem::lambda_for_mean_links(p.x, p.r, 12.0);
+      auto links = dem::create_links(p, lambda, mat);
+      const double dt = 0.9 * dem::critical_time_step(p, links);
+      const double rmin = *std::min_element(p.r.begin(), p.r.end());
+      dem::DemSolver solver(p, links, mat, dt, 0.0, 0.5 * rmin);
+      const double rmax = *std::max_element(p.r.begin(), p.r.end());
+      auto bottom = dem::DemSolver::select(p, [&](const auto& x) { return x[2] < rmax; }, "bottom");
+      auto top = dem::DemSolver::select(p, [&](const auto& x) { return x[2] > side - rmax; }, "top");
+      solver.add_motion({"bottom", bottom, dem::MotionKind::fixed, {true, true, true}, {}});
+      solver.add_motion({"top", top, dem::MotionKind::velocity, {false, false, true},
+                         [](double) { return 0.01; }});
+      solver.start();
+      solver.step(); // warm-up
+      demo::Stopwatch t;
+      for (int s = 0; s < steps; ++s)
+        solver.step();
+      const double sec = t.seconds();
+      const double ns_link = 1e9 * sec / (double(steps) * links.size());
+      const double ns_part = 1e9 * sec / (double(steps) * p.size());
+      const auto& nl = solver.neighbours();
+      const std::size_t mem = bytes(p.x) + bytes(p.x0) + bytes(p.v) + bytes(p.w) + bytes(p.f)
+                              + bytes(p.t) + bytes(p.r) + bytes(p.m) + bytes(p.inertia)
+                              + bytes(links.a) + bytes(links.b) + bytes(links.d0) + bytes(links.kn)
+                              + bytes(links.ks) + bytes(links.s_int) + bytes(links.fs)
+                              + bytes(links.n) + bytes(links.delta_max) + bytes(links.state)
+                              + bytes(nl.a) + bytes(nl.b) + bytes(nl.link) + bytes(nl.fs)
+                              + bytes(nl.n) + bytes(nl.touching);
+      const double bpl = double(mem) / links.size();
+      std::printf("%11zu %10zu %8d %13.1f %17.1f %11.1f %18.0f\n", p.size(), links.size(), threads,
+                  ns_link, ns_part, bpl, pack_rate);
+      cases.push_back({{"particles", p.size()}, {"links", links.size()}, {"threads", threads},
+                       {"ns_per_link_step", ns_link}, {"ns_per_particle_step", ns_part},
+                       {"bytes_per_link", bpl}, {"packing_spheres_per_s", pack_rate},
+                       {"neighbour_pairs", nl.size()}, {"steps", steps}, {"wall_s", sec}});
+    }
+    nlohmann::json out = cases.back();
+    out["cases"] = cases;
+    out["peak_rss_bytes"] = demo::peak_rss_bytes();
+    if (!summary.empty())
+      demo::write_json(summary, out);
+  });
+}
