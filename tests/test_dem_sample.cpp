@@ -107,3 +107,54 @@ TEST_CASE("sample bad input", "[dem][sample][errors]")
   c.material.phi_i_deg = 95.0;
   CHECK_THROWS_WITH(demo::run_sample(c), Contains("phi_i"));
 }
+
+#include "dembridge/dem/output.h"
+#include "dembridge/dem/solver.h"
+#include <hdf5.h>
+
+TEST_CASE("a run stopped by a NaN leaves readable particle output", "[dem][io][errors]")
+{
+  using namespace dembridge::dem;
+  const auto dir = std::filesystem::temp_directory_path() / "dembridge_nan";
+  std::filesystem::remove_all(dir);
+  std::vector<double> x, r;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      for (int k = 0; k < 4; ++k)
+      {
+        x.insert(x.end(), {2e-3 * i, 2e-3 * j, 2e-3 * k});
+        r.push_back(1e-3);
+      }
+  auto p = make_particles(x, r, 2400.0, 0.5);
+  auto l = create_links(p, 1.2, Material{});
+  try
+  {
+    ParticleWriter w(dir / "p.xdmf", l, p.size());
+    DemSolver s(p, l, Material{}, 0.5 * critical_time_step(p, l), 0.0, 1e-4);
+    s.start();
+    w.write(0.0, p, l);
+    s.step();
+    w.write(s.time(), p, l);
+    p.v[7] = std::nan("");
+    s.step(); // throws
+    FAIL("no exception");
+  }
+  catch (const std::runtime_error& e)
+  {
+    CHECK_THAT(e.what(), Contains("non-finite"));
+  }
+  // two frames, both readable
+  hid_t f = H5Fopen((dir / "p.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  REQUIRE(f >= 0);
+  CHECK(H5Lexists(f, "/frame_1/position", H5P_DEFAULT) > 0);
+  CHECK(H5Lexists(f, "/frame_1/damage", H5P_DEFAULT) > 0);
+  CHECK(H5Lexists(f, "/frame_2", H5P_DEFAULT) <= 0);
+  H5Fclose(f);
+  std::ifstream xf(dir / "p.xdmf");
+  std::string text((std::istreambuf_iterator<char>(xf)), std::istreambuf_iterator<char>());
+  CHECK(text.find("</Xdmf>") != std::string::npos);
+  std::size_t grids = 0;
+  for (auto q = text.find("<Time Value="); q != std::string::npos; q = text.find("<Time Value=", q + 1))
+    ++grids;
+  CHECK(grids == 4); // 2 frames x (particles, cracks)
+}
