@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <numbers>
 #include <numeric>
+#include <omp.h>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -67,23 +68,28 @@ Csr neighbours(const std::vector<double>& x, const std::vector<double>& r, doubl
                            emit(j);
                        });
   };
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i)
+  // one pass: each thread fills its own contiguous block of spheres
+  std::vector<std::vector<std::int32_t>> chunk;
+#pragma omp parallel
   {
-    std::int32_t k = 0;
-    visit(i, [&](std::int32_t) { ++k; });
-    c.start[i + 1] = k;
+#pragma omp single
+    chunk.resize(omp_get_num_threads());
+    auto& buf = chunk[omp_get_thread_num()];
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      const std::size_t first = buf.size();
+      visit(i, [&](std::int32_t j) { buf.push_back(j); });
+      std::sort(buf.begin() + first, buf.end());
+      c.start[i + 1] = static_cast<std::int32_t>(buf.size() - first);
+    }
   }
   for (std::size_t i = 0; i < n; ++i)
     c.start[i + 1] += c.start[i];
-  c.items.resize(c.start[n]);
-#pragma omp parallel for schedule(static)
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    std::int32_t k = c.start[i];
-    visit(i, [&](std::int32_t j) { c.items[k++] = j; });
-    std::sort(c.items.begin() + c.start[i], c.items.begin() + c.start[i + 1]);
-  }
+  c.items.clear();
+  c.items.reserve(c.start[n]);
+  for (auto& b2 : chunk) // static schedule: thread blocks are in sphere order
+    c.items.insert(c.items.end(), b2.begin(), b2.end());
   return c;
 }
 
@@ -281,7 +287,7 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
 
   const double skin = 1.0 * rmin, h = 1e-7 * (g.hi[0] - g.lo[0] + g.hi[1] - g.lo[1]);
   const int grow = o.growth_sweeps;
-  const double beta = 0.7, hug = rmin;
+  const double beta = 0.7, hug = rmin, max_step = 0.1 * rmin;
   Csr nb;
   std::vector<double> x_build, disp(3 * n), mom(3 * n, 0.0);
   std::vector<std::uint8_t> near(n, 1);
@@ -306,6 +312,7 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
     {
       nb = neighbours(p.x, p.r, skin);
       x_build = p.x;
+      ++p.rebuilds;
 #pragma omp parallel for schedule(static)
       for (std::size_t i = 0; i < n; ++i)
         near[i] = g.sdf({p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2]}) > -(p.r[i] + hug + skin);
@@ -340,17 +347,20 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
       {
         max_pen = std::max(max_pen, pen);
         const Point gr = gradient(g, c, h);
+        const double move = pen > 0.0 ? pen : 0.25 * pen; // gentle pull onto the wall
         for (int k = 0; k < 3; ++k)
-          d[k] -= pen * gr[k];
+          d[k] -= move * gr[k];
       }
       // heavy-ball momentum, restarted per sphere when it turns back
       double* m = &mom[3 * i];
       const double turn = m[0] * d[0] + m[1] * d[1] + m[2] * d[2];
       for (int k = 0; k < 3; ++k)
-      {
         m[k] = turn < 0.0 ? d[k] : beta * m[k] + d[k];
-        disp[3 * i + k] = m[k];
-      }
+      // at most max_step per sweep: no sphere outruns its neighbour list
+      const double mm = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+      const double cap = mm > max_step ? max_step / mm : 1.0;
+      for (int k = 0; k < 3; ++k)
+        disp[3 * i + k] = cap * m[k];
     }
     for (std::size_t i = 0; i < 3 * n; ++i)
       p.x[i] += disp[i];

@@ -74,7 +74,8 @@ struct Packing
   double max_overlap = 0.0;     ///< largest pair overlap / Rmin
   double max_penetration = 0.0; ///< largest boundary penetration / Rmin
   std::size_t shrunk = 0;       ///< spheres shrunk by the final step
-  int backoffs = 0;             ///< times all radii were scaled by 0.995 to unjam
+  int backoffs = 0;
+  int rebuilds = 0;             ///< neighbour-list rebuilds             ///< times all radii were scaled by 0.995 to unjam
   double max_shrink = 0.0;      ///< largest radius reduction / Rmin
   std::size_t size() const { return r.size(); }
 };
