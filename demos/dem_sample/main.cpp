@@ -14,6 +14,7 @@
 // velocity, damage, and the broken links as line cells), DIR/stress_strain.csv.
 #include "sample.h"
 #include "support.h"
+#include "dembridge/dem/material_file.h"
 
 #include <CLI/CLI.hpp>
 #include <iostream>
@@ -37,6 +38,9 @@ int main(int argc, char** argv)
       ->capture_default_str();
   app.add_option("--links-per-sphere", c.links_per_sphere, "target mean number of links per sphere")
       ->capture_default_str();
+  std::string material_file;
+  app.add_option("--material", material_file,
+                 "DE parameter file (JSON, from calibrate); options given after it override it");
   app.add_option("--youngs-modulus", m.youngs_modulus, "E in equation [1] [Pa]")->capture_default_str();
   app.add_option("--poisson-ratio", m.poisson_ratio, "nu in equation [1] [-]")->capture_default_str();
   app.add_option("--density", m.density, "bulk density of the concrete [kg/m^3]")->capture_default_str();
@@ -60,6 +64,20 @@ int main(int argc, char** argv)
   app.add_option("--frames", c.frames, "XDMF frames if the run goes to --max-strain")->capture_default_str();
   app.add_option("--output", c.output_dir, "output folder (XDMF, CSV); empty = none");
   app.add_option("--summary", summary, "write key results as JSON to this file");
+  // --material first, so that explicit options override the file
+  for (int i = 1; i + 1 < argc; ++i)
+    if (std::string(argv[i]) == "--material")
+      try
+      {
+        const auto f = dem::read_material(argv[i + 1]);
+        m = f.material;
+        c.links_per_sphere = f.links_per_sphere;
+      }
+      catch (const std::exception& e)
+      {
+        std::cerr << "error: " << e.what() << std::endl;
+        return 1;
+      }
   CLI11_PARSE(app, argc, argv);
 
   return demo::run_guarded(argc, argv, [&]

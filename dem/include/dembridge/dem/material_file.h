@@ -1,0 +1,43 @@
+#pragma once
+/// @file material_file.h
+/// The DE material parameter file (JSON) that the identification writes and
+/// every demo reads with --material FILE. Format (SI units, angles in degrees):
+///
+///     {
+///       "format": "dembridge-material-1",
+///       "youngs_modulus_pa": 3.0e10,      E in equation [1]
+///       "poisson_ratio": 0.2,             nu in equation [1]
+///       "density_kg_m3": 2400,            bulk density of the concrete
+///       "alpha": 3.1, "beta": 1.0, "gamma": 1.0,
+///       "tensile_strength_pa": 3.3e6,     T
+///       "cohesion_pa": 4.4e6,             C0
+///       "softening": 10,                  zeta
+///       "phi_i_deg": 30, "phi_c_deg": 30,
+///       "links_per_sphere": 12,           how lambda is chosen on a packing
+///       "lambda": 1.49,                   lambda on the calibration packing (information)
+///       "macroscopic": {...},             what the parameters reproduce (information)
+///       "calibration": {...}              how they were obtained (information)
+///     }
+
+#include "dembridge/dem/assembly.h"
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+namespace dembridge::dem
+{
+
+struct MaterialFile
+{
+  Material material;
+  double links_per_sphere = 12.0;
+  double lambda = 0.0;          ///< 0 if not given
+  nlohmann::json macroscopic;   ///< free-form information
+  nlohmann::json calibration;   ///< free-form information
+};
+
+/// @throws std::runtime_error naming the file and the missing or bad key.
+MaterialFile read_material(const std::filesystem::path& file);
+void write_material(const std::filesystem::path& file, const MaterialFile& m);
+
+} // namespace dembridge::dem

@@ -1,0 +1,224 @@
+#include "identify.h"
+
+#include "dembridge/dem/packing.h"
+
+#include <cmath>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <unistd.h>
+
+namespace dembridge::demo
+{
+namespace
+{
+struct Runner
+{
+  IdentifyConfig cfg;
+  nlohmann::json history = nlohmann::json::array();
+
+  nlohmann::json run(const dem::Material& m, const std::string& test, bool elastic,
+                     const std::string& out = "")
+  {
+    SampleConfig s = cfg.sample;
+    s.material = m;
+    s.test = test;
+    s.quiet = true;
+    s.output_dir = out;
+    if (elastic)
+    {
+      s.material.tensile = s.material.cohesion = 1e12; // no breakage
+      s.max_strain = 5e-5;
+    }
+    auto r = run_sample(s);
+    nlohmann::json h = {{"test", elastic ? "elastic " + test : test},
+                        {"alpha", m.micro.alpha},
+                        {"beta", m.micro.beta},
+                        {"gamma", m.micro.gamma},
+                        {"tensile_strength_pa", m.tensile},
+                        {"cohesion_pa", m.cohesion},
+                        {"youngs_modulus_pa", r["youngs_modulus_pa"]},
+                        {"poisson_ratio", r["poisson_ratio"]},
+                        {"peak_stress_pa", r["peak_stress_pa"]},
+                        {"wall_s", r["wall_s"]}};
+    history.push_back(h);
+    if (!cfg.quiet)
+      std::cout << "  " << h.dump() << std::endl;
+    return r;
+  }
+};
+
+[[noreturn]] void unreachable(const std::string& what, double v, double lo, double hi,
+                              const std::string& why)
+{
+  std::ostringstream s;
+  s << "target " << what << " = " << v << " cannot be reached on this packing: the reachable range is ["
+    << lo << ", " << hi << "] (" << why << ")";
+  throw std::runtime_error(s.str());
+}
+} // namespace
+
+IdentifyResult identify(const IdentifyConfig& cfg0)
+{
+  IdentifyConfig cfg = cfg0;
+  const Targets& t = cfg.target;
+  if (!(t.youngs_modulus > 0.0))
+    throw std::runtime_error("target Young's modulus must be > 0 Pa");
+  if (!(t.poisson_ratio > 0.0 && t.poisson_ratio < 0.5))
+    throw std::runtime_error("target Poisson's ratio " + std::to_string(t.poisson_ratio)
+                             + ": must be in (0, 0.5) (equation [1] needs nu > 0 here)");
+  if (!cfg.elastic_only)
+  {
+    if (!(t.tensile_strength > 0.0) || !(t.compressive_strength > 0.0))
+      throw std::runtime_error("target strengths must be > 0 Pa");
+    if (t.compressive_strength / t.tensile_strength <= 1.0)
+      unreachable("sigma_c/sigma_t", t.compressive_strength / t.tensile_strength, 1.0, 1e300,
+                  "a DE concrete is stronger in compression than in tension");
+  }
+  // one packing for all tests
+  if (cfg.sample.packing_file.empty())
+  {
+    const double D = cfg.sample.diameter, H = cfg.sample.height;
+    const dem::Region region = cfg.sample.shape == "cylinder"
+                                   ? dem::cylinder_region({0, 0, 0}, 0.5 * D, H)
+                                   : dem::box_region({0, 0, 0}, {D, D, H});
+    dem::PackingOptions po;
+    po.mean_radius = cfg.sample.mean_radius;
+    po.radius_ratio = cfg.sample.radius_ratio;
+    po.seed = cfg.sample.seed;
+    const auto pk = dem::generate_packing(region, po);
+    const auto file = std::filesystem::temp_directory_path()
+                      / ("dembridge_calibration_" + std::to_string(::getpid()) + ".txt");
+    dem::write_packing(file, pk);
+    cfg.sample.packing_file = file.string();
+  }
+  Runner R{cfg};
+  dem::Material m = cfg.fixed;
+  m.youngs_modulus = t.youngs_modulus;
+  m.poisson_ratio = t.poisson_ratio;
+  m.density = t.density;
+  m.micro = {0.0, 1.0, 1.0};
+  const double nu = t.poisson_ratio;
+
+  // 1. alpha for nu (bisection; nu_sample rises with alpha)
+  auto nu_at = [&](double alpha)
+  {
+    dem::Material q = m;
+    q.micro.alpha = alpha;
+    return R.run(q, "compression", true)["poisson_ratio"].get<double>();
+  };
+  double a_lo = 0.0, a_hi = 0.95 / nu;
+  double n_lo = nu_at(a_lo), n_hi = nu_at(a_hi);
+  if (nu < n_lo || nu > n_hi)
+    unreachable("Poisson's ratio", nu, n_lo, n_hi, "alpha from 0 to 0.95/nu, i.e. K_s/K_n from "
+                                                   "1/(1+nu) to nearly 0");
+  double alpha = a_lo;
+  for (int it = 0; it < 30; ++it)
+  {
+    // secant inside the bracket, bisection as a fallback
+    double a = a_lo + (nu - n_lo) * (a_hi - a_lo) / (n_hi - n_lo);
+    if (!(a > a_lo && a < a_hi))
+      a = 0.5 * (a_lo + a_hi);
+    const double n = nu_at(a);
+    alpha = a;
+    if (std::abs(n - nu) < cfg.tol_elastic)
+      break;
+    (n < nu ? a_lo : a_hi) = a;
+    (n < nu ? n_lo : n_hi) = n;
+  }
+  m.micro.alpha = alpha;
+
+  // 2. beta for E (E_sample proportional to 1/den with gamma fixed)
+  auto den = [&](const dem::MicroMacro& c)
+  { return c.beta * (1.0 + nu) + c.gamma * (1.0 - c.alpha * nu); };
+  for (int it = 0; it < 4; ++it)
+  {
+    const double E = R.run(m, "compression", true)["youngs_modulus_pa"].get<double>();
+    if (std::abs(E / t.youngs_modulus - 1.0) < cfg.tol_elastic)
+      break;
+    const double target_den = den(m.micro) * E / t.youngs_modulus;
+    const double beta = (target_den - m.micro.gamma * (1.0 - alpha * nu)) / (1.0 + nu);
+    if (beta > 0.0)
+      m.micro.beta = beta;
+    else // keep beta, scale gamma (the gamma term is positive: alpha nu < 1)
+      m.micro.gamma = (target_den - m.micro.beta * (1.0 + nu)) / (1.0 - alpha * nu);
+  }
+
+  IdentifyResult res;
+  if (!cfg.elastic_only)
+  {
+    // 3. C0/T for sigma_c/sigma_t, then the common scale for sigma_t
+    const double ratio_target = t.compressive_strength / t.tensile_strength;
+    auto strengths = [&](double rho)
+    {
+      dem::Material q = m;
+      q.tensile = t.tensile_strength; // scale is irrelevant for the ratio
+      q.cohesion = rho * q.tensile;
+      const double st = R.run(q, "tension", false)["peak_stress_pa"].get<double>();
+      const double sc = R.run(q, "compression", false)["peak_stress_pa"].get<double>();
+      return std::pair{st, sc};
+    };
+    double r_lo = 0.3, r_hi = 30.0;
+    auto [st_lo, sc_lo] = strengths(r_lo);
+    auto [st_hi, sc_hi] = strengths(r_hi);
+    double q_lo = sc_lo / st_lo, q_hi = sc_hi / st_hi;
+    if (ratio_target < q_lo || ratio_target > q_hi)
+      unreachable("sigma_c/sigma_t", ratio_target, q_lo, q_hi, "C0/T from 0.3 to 30");
+    double rho = r_lo, st = st_lo;
+    for (int it = 0; it < 20; ++it)
+    {
+      const double r = std::sqrt(r_lo * r_hi);
+      auto [a, b] = strengths(r);
+      rho = r;
+      st = a;
+      const double q = b / a;
+      if (std::abs(q / ratio_target - 1.0) < cfg.tol_strength)
+        break;
+      (q < ratio_target ? r_lo : r_hi) = r;
+    }
+    // homogeneity: scaling T and C0 by k scales sigma_t by k
+    const double k = t.tensile_strength / st;
+    m.tensile = k * t.tensile_strength;
+    m.cohesion = rho * m.tensile;
+  }
+
+  // final tests with the identified parameters
+  auto out = [&](const char* name)
+  { return cfg.output_dir.empty() ? std::string() : (std::filesystem::path(cfg.output_dir) / name).string(); };
+  // E and nu: initial tangent of an elastic test (no breakage); strengths:
+  // peaks of the full tests
+  const auto elastic = R.run(m, "compression", true);
+  res.tension = cfg.elastic_only ? nlohmann::json() : R.run(m, "tension", false, out("tension"));
+  res.compression = R.run(m, "compression", cfg.elastic_only, out("compression"));
+  res.achieved = {{"youngs_modulus_pa", elastic["youngs_modulus_pa"]},
+                  {"poisson_ratio", elastic["poisson_ratio"]}};
+  if (!cfg.elastic_only)
+  {
+    res.achieved["tensile_strength_pa"] = res.tension["peak_stress_pa"];
+    res.achieved["compressive_strength_pa"] = res.compression["peak_stress_pa"];
+    // for information: the secant-like slope of the full compression test
+    // (5-30 % of the peak) already includes early link failures
+    res.achieved["compression_test_modulus_pa"] = res.compression["youngs_modulus_pa"];
+  }
+  res.history = R.history;
+  res.file.material = m;
+  res.file.links_per_sphere = cfg.sample.links_per_sphere;
+  res.file.lambda = res.compression["lambda"].get<double>();
+  res.file.macroscopic = res.achieved;
+  res.file.calibration = {{"method", "demos/calibrate: bisection on alpha for nu, beta for E, "
+                                     "bisection on C0/T for sigma_c/sigma_t, rescale for sigma_t"},
+                          {"sample", {{"shape", cfg.sample.shape},
+                                      {"diameter_m", cfg.sample.diameter},
+                                      {"height_m", cfg.sample.height},
+                                      {"mean_radius_m", cfg.sample.mean_radius},
+                                      {"radius_ratio", cfg.sample.radius_ratio},
+                                      {"seed", cfg.sample.seed},
+                                      {"particles", res.compression["particles"]},
+                                      {"strain_rate_per_s", cfg.sample.strain_rate}}},
+                          {"simulated_tests", R.history.size()}};
+  if (cfg0.sample.packing_file.empty())
+    std::filesystem::remove(cfg.sample.packing_file);
+  return res;
+}
+
+} // namespace dembridge::demo

@@ -1,0 +1,65 @@
+#pragma once
+/// @file identify.h
+/// Identification of the DE parameters from macroscopic concrete properties
+/// (section 2.2 of the paper, section 2 of METHOD.md), on simulated
+/// quasi-static uniaxial tests of one packing (demos/dem_sample).
+///
+/// It uses three exact properties of the model:
+/// 1. Elastic, nu: by equation [1], K_s/K_n = (1 - alpha nu)/(1 + nu) depends
+///    on alpha only (nu being the target), and the sample's Poisson ratio
+///    depends only on K_s/K_n (the response is homogeneous in the stiffness
+///    scale). So alpha is found by bisection on the sample's nu (it rises
+///    with alpha) between alpha = 0 and alpha = 0.95/nu (K_s -> 0).
+/// 2. Elastic, E: the sample's E is proportional to the stiffness scale
+///    (1 + alpha)/(beta (1 + nu) + gamma (1 - alpha nu)); with gamma fixed,
+///    beta is solved from one measured E, then checked.
+/// 3. Strengths: the law is homogeneous of degree 1 in (T, C0): scaling both
+///    scales every peak stress. So sigma_c/sigma_t depends only on C0/T
+///    (zeta, phi_i, phi_c fixed): bisection on log(C0/T) for the ratio,
+///    then one exact rescale for sigma_t, then a check run.
+/// Unreachable targets (nu outside the packing's range, sigma_c/sigma_t
+/// outside the range C0/T in [0.3, 30] gives) stop with the reachable range.
+
+#include "dembridge/dem/material_file.h"
+#include "sample.h"
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace dembridge::demo
+{
+
+struct Targets
+{
+  double youngs_modulus = 30e9;        ///< [Pa]
+  double poisson_ratio = 0.2;          ///< [-]
+  double tensile_strength = 3.0e6;     ///< sigma_t [Pa]
+  double compressive_strength = 25e6;  ///< sigma_c [Pa]
+  double density = 2400.0;             ///< [kg/m^3]
+};
+
+struct IdentifyConfig
+{
+  SampleConfig sample;           ///< geometry, packing, rate, damping (material ignored)
+  Targets target;
+  dem::Material fixed;           ///< zeta, phi_i, phi_c kept; the rest identified
+  double tol_elastic = 0.005;    ///< relative on E, absolute on nu
+  double tol_strength = 0.01;    ///< relative on sigma_c / sigma_t
+  bool elastic_only = false;
+  std::string output_dir;        ///< final tests write DIR/tension and DIR/compression
+  bool quiet = false;
+};
+
+struct IdentifyResult
+{
+  dem::MaterialFile file;        ///< the identified parameters
+  nlohmann::json achieved;       ///< E, nu, sigma_t, sigma_c measured with them
+  nlohmann::json history;        ///< every simulated test
+  nlohmann::json tension, compression; ///< summaries of the final tests
+};
+
+/// @throws std::runtime_error for unreachable targets (naming the target and
+/// the reachable range) and bad input.
+IdentifyResult identify(const IdentifyConfig& cfg);
+
+} // namespace dembridge::demo
