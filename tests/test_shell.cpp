@@ -243,7 +243,7 @@ TEST_CASE("lumped mass: total mass and rotary inertia", "[shell]")
       CHECK(std::abs(n[3 * i + k] - p.rotation[3 * k + 2]) < 1e-12);
 }
 
-TEST_CASE("pressure on a curved shell: resultant and static plate solution", "[shell]")
+TEST_CASE("pressure on a rotated plate: resultant and cantilever under uniform load", "[shell]")
 {
   // Flat, rotated plate: the resultant of p over the whole surface is
   // p * area along the normal (tributary areas sum to the area exactly).

@@ -7,16 +7,12 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "errors.h"
+
 namespace dembridge::dem
 {
 namespace
 {
-[[noreturn]] void fail(const std::string& what, double v, const std::string& allowed)
-{
-  std::ostringstream s;
-  s << what << " = " << v << ": must be " << allowed;
-  throw std::runtime_error(s.str());
-}
 double max_radius(std::span<const double> r)
 {
   return r.empty() ? 0.0 : *std::max_element(r.begin(), r.end());
@@ -26,21 +22,21 @@ double max_radius(std::span<const double> r)
 void Material::validate() const
 {
   if (!(youngs_modulus > 0.0) || !std::isfinite(youngs_modulus))
-    fail("Young's modulus E", youngs_modulus, "> 0 Pa");
+    impl::out_of_range("Young's modulus E", youngs_modulus, "> 0 Pa");
   if (!(poisson_ratio > -1.0 && poisson_ratio < 0.5))
-    fail("Poisson's ratio nu", poisson_ratio, "in (-1, 0.5)");
+    impl::out_of_range("Poisson's ratio nu", poisson_ratio, "in (-1, 0.5)");
   if (!(density > 0.0) || !std::isfinite(density))
-    fail("density", density, "> 0 kg/m^3");
+    impl::out_of_range("density", density, "> 0 kg/m^3");
   if (!(tensile >= 0.0) || !std::isfinite(tensile))
-    fail("tensile strength T", tensile, ">= 0 Pa");
+    impl::out_of_range("tensile strength T", tensile, ">= 0 Pa");
   if (!(cohesion >= 0.0) || !std::isfinite(cohesion))
-    fail("cohesion C0", cohesion, ">= 0 Pa");
+    impl::out_of_range("cohesion C0", cohesion, ">= 0 Pa");
   if (!(zeta >= 0.0) || !std::isfinite(zeta))
-    fail("softening factor zeta", zeta, ">= 0");
+    impl::out_of_range("softening factor zeta", zeta, ">= 0");
   if (!(phi_i_deg >= 0.0 && phi_i_deg < 90.0))
-    fail("internal friction angle phi_i", phi_i_deg, "in [0, 90) degrees");
+    impl::out_of_range("internal friction angle phi_i", phi_i_deg, "in [0, 90) degrees");
   if (!(phi_c_deg >= 0.0 && phi_c_deg < 90.0))
-    fail("contact friction angle phi_c", phi_c_deg, "in [0, 90) degrees");
+    impl::out_of_range("contact friction angle phi_c", phi_c_deg, "in [0, 90) degrees");
   // eq. [1] must give positive stiffnesses
   (void)link_stiffness(youngs_modulus, poisson_ratio, 1.0, 1.0, micro);
 }
@@ -61,9 +57,9 @@ Particles make_particles(std::span<const double> x, std::span<const double> r, d
   if (x.size() != 3 * r.size())
     throw std::runtime_error("make_particles: positions must be (n, 3) for n radii");
   if (!(rho_bulk > 0.0))
-    fail("density", rho_bulk, "> 0 kg/m^3");
+    impl::out_of_range("density", rho_bulk, "> 0 kg/m^3");
   if (!(packing_fraction > 0.0 && packing_fraction <= 1.0))
-    fail("packing fraction", packing_fraction, "in (0, 1]");
+    impl::out_of_range("packing fraction", packing_fraction, "in (0, 1]");
   const double rho_s = rho_bulk / packing_fraction;
   Particles p;
   const std::size_t n = r.size();
@@ -79,10 +75,10 @@ Particles make_particles(std::span<const double> x, std::span<const double> r, d
   for (std::size_t i = 0; i < n; ++i)
   {
     if (!(r[i] > 0.0) || !std::isfinite(r[i]))
-      fail("radius of sphere " + std::to_string(i), r[i], "> 0 m");
+      impl::out_of_range("radius of sphere " + std::to_string(i), r[i], "> 0 m");
     for (int k = 0; k < 3; ++k)
       if (!std::isfinite(x[3 * i + k]))
-        fail("coordinate of sphere " + std::to_string(i), x[3 * i + k], "finite");
+        impl::out_of_range("coordinate of sphere " + std::to_string(i), x[3 * i + k], "finite");
     p.m[i] = rho_s * 4.0 / 3.0 * std::numbers::pi * r[i] * r[i] * r[i];
     p.inertia[i] = 0.4 * p.m[i] * r[i] * r[i];
   }
@@ -107,17 +103,13 @@ void for_pairs_within(std::span<const double> x, std::span<const double> r, doub
   for (std::size_t i = 0; i < n; ++i)
   {
     found.clear();
-    grid.for_each_near(&x[3 * i],
-                       [&](std::int32_t j)
-                       {
-                         if (j <= static_cast<std::int32_t>(i))
-                           return;
-                         const double dx = x[3 * j] - x[3 * i], dy = x[3 * j + 1] - x[3 * i + 1],
-                                      dz = x[3 * j + 2] - x[3 * i + 2];
-                         const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
-                         if (d <= lambda * (r[i] + r[j]))
-                           found.emplace_back(j, d);
-                       });
+    grid.for_each_later_near(x, i,
+                             [&](std::int32_t j, double d2)
+                             {
+                               const double lim = lambda * (r[i] + r[j]);
+                               if (d2 <= lim * lim)
+                                 found.emplace_back(j, std::sqrt(d2));
+                             });
     std::sort(found.begin(), found.end());
     for (auto [j, d] : found)
       fn(static_cast<std::int32_t>(i), j, d);
@@ -128,7 +120,7 @@ void for_pairs_within(std::span<const double> x, std::span<const double> r, doub
 Links create_links(const Particles& p, double lambda, const Material& mat)
 {
   if (!(lambda >= 1.0) || !std::isfinite(lambda))
-    fail("interaction range lambda", lambda, ">= 1");
+    impl::out_of_range("interaction range lambda", lambda, ">= 1");
   mat.validate();
   Links l;
   for_pairs_within(p.x, p.r, lambda,
@@ -169,7 +161,7 @@ std::vector<std::size_t> count_pairs(std::span<const double> x, std::span<const 
 double lambda_for_mean_links(std::span<const double> x, std::span<const double> r, double target)
 {
   if (!(target > 0.0))
-    fail("target mean links per sphere", target, "> 0");
+    impl::out_of_range("target mean links per sphere", target, "> 0");
   // ratios q = D / (Ra + Rb) of all pairs up to 2; pick the quantile
   std::vector<double> q;
   for_pairs_within(x, r, 2.0, [&](std::int32_t i, std::int32_t j, double d)

@@ -95,17 +95,13 @@ bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
   for (std::size_t i = 0; i < np; ++i)
   {
     found.clear();
-    grid.for_each_near(&x[3 * i],
-                       [&](std::int32_t j)
-                       {
-                         if (j <= static_cast<std::int32_t>(i))
-                           return;
-                         const double dx = x[3 * j] - x[3 * i], dy = x[3 * j + 1] - x[3 * i + 1],
-                                      dz = x[3 * j + 2] - x[3 * i + 2];
-                         const double lim = r[i] + r[j] + _skin;
-                         if (dx * dx + dy * dy + dz * dz < lim * lim)
-                           found.push_back(j);
-                       });
+    grid.for_each_later_near(x, i,
+                             [&](std::int32_t j, double d2)
+                             {
+                               const double lim = r[i] + r[j] + _skin;
+                               if (d2 < lim * lim)
+                                 found.push_back(j);
+                             });
     std::sort(found.begin(), found.end());
     for (auto j : found)
     {

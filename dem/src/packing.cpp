@@ -13,16 +13,12 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "errors.h"
+
 namespace dembridge::dem
 {
 namespace
 {
-[[noreturn]] void fail(const std::string& what, double v, const std::string& allowed)
-{
-  std::ostringstream s;
-  s << what << " = " << v << ": must be " << allowed;
-  throw std::runtime_error(s.str());
-}
 
 Point gradient(const Region& g, const Point& x, double h)
 {
@@ -140,7 +136,7 @@ Region box_region(const Point& lo, const Point& hi)
 {
   for (int k = 0; k < 3; ++k)
     if (!(hi[k] > lo[k]))
-      fail("box size along axis " + std::to_string(k), hi[k] - lo[k], "> 0 m");
+      impl::out_of_range("box size along axis " + std::to_string(k), hi[k] - lo[k], "> 0 m");
   Region g;
   g.name = "box";
   g.lo = lo;
@@ -163,9 +159,9 @@ Region box_region(const Point& lo, const Point& hi)
 Region cylinder_region(const Point& base, double radius, double height)
 {
   if (!(radius > 0.0))
-    fail("cylinder radius", radius, "> 0 m");
+    impl::out_of_range("cylinder radius", radius, "> 0 m");
   if (!(height > 0.0))
-    fail("cylinder height", height, "> 0 m");
+    impl::out_of_range("cylinder height", height, "> 0 m");
   Region g;
   g.name = "cylinder";
   g.lo = {base[0] - radius, base[1] - radius, base[2]};
@@ -206,13 +202,13 @@ Region sdf_region(const std::string& name, std::function<double(const Point&)> s
 Packing generate_packing(const Region& g, const PackingOptions& o)
 {
   if (!(o.radius_ratio >= 1.0 && o.radius_ratio <= 3.0))
-    fail("radius ratio Rmax/Rmin", o.radius_ratio, "in [1, 3]");
+    impl::out_of_range("radius ratio Rmax/Rmin", o.radius_ratio, "in [1, 3]");
   if (!(o.target_fraction > 0.0 && o.target_fraction < 0.74))
-    fail("target packing fraction", o.target_fraction, "in (0, 0.74)");
+    impl::out_of_range("target packing fraction", o.target_fraction, "in (0, 0.74)");
   if (!(o.tolerance > 0.0))
-    fail("overlap tolerance", o.tolerance, "> 0");
+    impl::out_of_range("overlap tolerance", o.tolerance, "> 0");
   if (o.count == 0 && !(o.mean_radius > 0.0))
-    fail("mean radius", o.mean_radius, "> 0 m (or give a number of spheres)");
+    impl::out_of_range("mean radius", o.mean_radius, "> 0 m (or give a number of spheres)");
   const double q = o.radius_ratio;
   // E[r^3] for r uniform in [a, q a], per a^3
   const double er3 = q > 1.0 ? (std::pow(q, 4) - 1.0) / (4.0 * (q - 1.0)) : 1.0;

@@ -182,6 +182,15 @@ nlohmann::json run_sample(const SampleConfig& cfg)
   const std::int64_t sample_every = std::max<std::int64_t>(1, nsteps / 2000);
   const std::int64_t frame_every = std::max<std::int64_t>(1, nsteps / std::max(1, cfg.frames));
   if (!cfg.quiet)
+  {
+    const auto& mt = cfg.material;
+    std::cout << "# material: E " << mt.youngs_modulus << " Pa, nu " << mt.poisson_ratio
+              << ", density " << mt.density << " kg/m^3, alpha " << mt.micro.alpha << ", beta "
+              << mt.micro.beta << ", gamma " << mt.micro.gamma << ", T " << mt.tensile
+              << " Pa, C0 " << mt.cohesion << " Pa, zeta " << mt.zeta << ", phi_i "
+              << mt.phi_i_deg << " deg, phi_c " << mt.phi_c_deg << " deg\n";
+  }
+  if (!cfg.quiet)
     std::cout << p.size() << " spheres, " << links.size() << " links (lambda " << lambda
               << "), dt " << dt << " s (critical " << dt_crit << "), up to " << nsteps
               << " steps, damping " << damping << " 1/s\n"

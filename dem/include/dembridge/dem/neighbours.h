@@ -36,6 +36,23 @@ public:
         }
   }
 
+  /// Calls fn(j, d2) for every particle j > i near particle i (same 27
+  /// cells), with d2 the squared centre distance; x is the array the grid
+  /// was built from.
+  template <typename Fn>
+  void for_each_later_near(std::span<const double> x, std::size_t i, Fn&& fn) const
+  {
+    for_each_near(&x[3 * i],
+                  [&](std::int32_t j)
+                  {
+                    if (j <= static_cast<std::int32_t>(i))
+                      return;
+                    const double dx = x[3 * j] - x[3 * i], dy = x[3 * j + 1] - x[3 * i + 1],
+                                 dz = x[3 * j + 2] - x[3 * i + 2];
+                    fn(j, dx * dx + dy * dy + dz * dz);
+                  });
+  }
+
 private:
   int cell_of(double v, int k) const;
   double _lo[3], _h;
