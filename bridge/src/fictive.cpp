@@ -1,0 +1,320 @@
+#include "dembridge/bridge/fictive.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace dembridge::bridge
+{
+namespace
+{
+using V3 = std::array<double, 3>;
+
+/// Shape functions of the fictive element at reference (s, t, z), z in
+/// [-1, 1]: for each shell node k of the cell, {N_k^-, N_k^+}.
+void shape(int npc, double s, double t, double z, double* nm, double* np)
+{
+  double m[4];
+  if (npc == 3)
+  {
+    m[0] = 1.0 - s - t;
+    m[1] = s;
+    m[2] = t;
+  }
+  else
+  {
+    m[0] = (1 - s) * (1 - t);
+    m[1] = s * (1 - t);
+    m[2] = (1 - s) * t;
+    m[3] = s * t;
+  }
+  for (int k = 0; k < npc; ++k)
+  {
+    nm[k] = m[k] * 0.5 * (1.0 - z);
+    np[k] = m[k] * 0.5 * (1.0 + z);
+  }
+}
+
+/// Derivatives of the mid-surface functions m_k w.r.t. (s, t).
+void dshape(int npc, double s, double t, double* ds, double* dt)
+{
+  if (npc == 3)
+  {
+    ds[0] = -1; ds[1] = 1; ds[2] = 0;
+    dt[0] = -1; dt[1] = 0; dt[2] = 1;
+  }
+  else
+  {
+    ds[0] = -(1 - t); ds[1] = 1 - t; ds[2] = -t; ds[3] = t;
+    dt[0] = -(1 - s); dt[1] = -s; dt[2] = 1 - s; dt[3] = s;
+  }
+}
+
+struct Element
+{
+  int npc;
+  double xm[4][3], xp[4][3]; // fictive nodes (bottom, top) of each shell node
+};
+
+V3 map(const Element& e, double s, double t, double z)
+{
+  double nm[4], np[4];
+  shape(e.npc, s, t, z, nm, np);
+  V3 x{0, 0, 0};
+  for (int k = 0; k < e.npc; ++k)
+    for (int i = 0; i < 3; ++i)
+      x[i] += nm[k] * e.xm[k][i] + np[k] * e.xp[k][i];
+  return x;
+}
+
+/// Newton inversion of the isoparametric map; returns false if it fails.
+bool invert(const Element& e, const V3& p, V3& ref)
+{
+  double s = e.npc == 3 ? 1.0 / 3.0 : 0.5, t = s, z = 0.0;
+  for (int it = 0; it < 50; ++it)
+  {
+    const V3 x = map(e, s, t, z);
+    const V3 r{p[0] - x[0], p[1] - x[1], p[2] - x[2]};
+    double ds[4], dt[4];
+    dshape(e.npc, s, t, ds, dt);
+    double J[3][3] = {};
+    double nm[4], np[4];
+    shape(e.npc, s, t, z, nm, np);
+    for (int k = 0; k < e.npc; ++k)
+      for (int i = 0; i < 3; ++i)
+      {
+        const double mid = 0.5 * (e.xm[k][i] + e.xp[k][i]);
+        const double half = 0.5 * (e.xp[k][i] - e.xm[k][i]);
+        J[i][0] += ds[k] * (mid + z * half);
+        J[i][1] += dt[k] * (mid + z * half);
+        // dm_k/dz = 0; d/dz of (m_k (mid + z half)) = m_k half
+        J[i][2] += (nm[k] + np[k]) * half;
+      }
+    const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1])
+                       - J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0])
+                       + J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+    if (!(std::abs(det) > 0.0))
+      return false;
+    // Cramer's rule
+    auto solve = [&](int col)
+    {
+      double M[3][3];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          M[i][j] = j == col ? r[i] : J[i][j];
+      return (M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1])
+              - M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0])
+              + M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0]))
+             / det;
+    };
+    const double d0 = solve(0), d1 = solve(1), d2 = solve(2);
+    s += d0;
+    t += d1;
+    z += d2;
+    if (std::abs(d0) + std::abs(d1) + std::abs(d2) < 1e-14)
+      break;
+  }
+  ref = {s, t, z};
+  return std::isfinite(s) && std::isfinite(t) && std::isfinite(z);
+}
+
+/// Smallest margin of the reference coordinates (>= 0 inside).
+double margin(int npc, const V3& r)
+{
+  double m = std::min(1.0 - std::abs(r[2]), std::min(r[0], r[1]));
+  m = std::min(m, npc == 3 ? 1.0 - r[0] - r[1] : std::min(1.0 - r[0], 1.0 - r[1]));
+  return m;
+}
+
+V3 clamp(int npc, V3 r)
+{
+  r[2] = std::clamp(r[2], -1.0, 1.0);
+  r[0] = std::clamp(r[0], 0.0, 1.0);
+  r[1] = std::clamp(r[1], 0.0, 1.0);
+  if (npc == 3 && r[0] + r[1] > 1.0)
+  {
+    const double excess = 0.5 * (r[0] + r[1] - 1.0);
+    r[0] = std::clamp(r[0] - excess, 0.0, 1.0);
+    r[1] = 1.0 - r[0];
+  }
+  return r;
+}
+} // namespace
+
+std::vector<double> fictive_nodes(const ShellGeometry& g)
+{
+  if (!(g.thickness > 0.0))
+    throw std::runtime_error("fictive nodes: thickness " + std::to_string(g.thickness)
+                             + " m must be > 0");
+  const std::size_t n = g.x.size() / 3;
+  if (g.normals.size() != g.x.size())
+    throw std::runtime_error("fictive nodes: normals and coordinates differ in size");
+  std::vector<double> f(6 * n);
+  for (std::size_t k = 0; k < n; ++k)
+    for (int i = 0; i < 3; ++i)
+    {
+      f[6 * k + i] = g.x[3 * k + i] - 0.5 * g.thickness * g.normals[3 * k + i];
+      f[6 * k + 3 + i] = g.x[3 * k + i] + 0.5 * g.thickness * g.normals[3 * k + i];
+    }
+  return f;
+}
+
+CouplingOperator locate(const ShellGeometry& g, std::span<const double> points,
+                        const LocateOptions& opt)
+{
+  const int npc = g.nodes_per_cell;
+  if (npc != 3 && npc != 4)
+    throw std::runtime_error("fictive elements need triangles (3 nodes) or quadrilaterals (4)");
+  const auto f = fictive_nodes(g);
+  const std::size_t ncell = g.cells.size() / npc, np = points.size() / 3;
+  const double maxd = opt.max_distance >= 0.0 ? opt.max_distance : g.thickness;
+  // elements and their bounding boxes
+  std::vector<Element> el(ncell);
+  std::vector<std::array<double, 6>> box(ncell);
+  for (std::size_t c = 0; c < ncell; ++c)
+  {
+    el[c].npc = npc;
+    auto& b = box[c];
+    b = {1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
+    for (int k = 0; k < npc; ++k)
+    {
+      const auto node = g.cells[c * npc + k];
+      for (int i = 0; i < 3; ++i)
+      {
+        el[c].xm[k][i] = f[6 * node + i];
+        el[c].xp[k][i] = f[6 * node + 3 + i];
+        for (double v : {el[c].xm[k][i], el[c].xp[k][i]})
+        {
+          b[i] = std::min(b[i], v);
+          b[3 + i] = std::max(b[3 + i], v);
+        }
+      }
+    }
+  }
+  CouplingOperator op;
+  op._npc = npc;
+  const double tol = opt.tolerance;
+  for (std::size_t p = 0; p < np; ++p)
+  {
+    const V3 x{points[3 * p], points[3 * p + 1], points[3 * p + 2]};
+    int best_in = -1, best_out = -1, inside = 0;
+    double best_margin = -1e300, best_dist = 1e300;
+    V3 ref_in{}, ref_out{};
+    for (std::size_t c = 0; c < ncell; ++c)
+    {
+      const auto& b = box[c];
+      double out = 0.0;
+      for (int i = 0; i < 3; ++i)
+        out = std::max({out, b[i] - x[i], x[i] - b[3 + i]});
+      if (out > maxd)
+        continue;
+      V3 r;
+      if (!invert(el[c], x, r))
+        continue;
+      const double m = margin(npc, r);
+      if (m >= -tol)
+      {
+        ++inside;
+        if (m > best_margin)
+        {
+          best_margin = m;
+          best_in = static_cast<int>(c);
+          ref_in = r;
+        }
+      }
+      else if (best_in < 0)
+      {
+        const V3 rc = clamp(npc, r);
+        const V3 y = map(el[c], rc[0], rc[1], rc[2]);
+        const double d = std::hypot(y[0] - x[0], y[1] - x[1], y[2] - x[2]);
+        if (d < best_dist)
+        {
+          best_dist = d;
+          best_out = static_cast<int>(c);
+          ref_out = rc;
+        }
+      }
+    }
+    int cell = best_in;
+    V3 ref = ref_in;
+    if (cell < 0)
+    {
+      if (best_out < 0 || best_dist > maxd)
+      {
+        std::ostringstream s;
+        s << "particle " << p << " at (" << x[0] << ", " << x[1] << ", " << x[2]
+          << ") lies in no fictive element and is farther than " << maxd
+          << " m from all of them: check the overlap region against the shell mesh";
+        throw std::runtime_error(s.str());
+      }
+      cell = best_out;
+      ref = ref_out;
+      ++op._outside;
+    }
+    else if (inside > 1)
+      ++op._ambiguous;
+    op._cell.push_back(cell);
+    op._ref.insert(op._ref.end(), ref.begin(), ref.end());
+    double nm[4], npl[4];
+    shape(npc, ref[0], ref[1], ref[2], nm, npl);
+    for (int k = 0; k < npc; ++k)
+    {
+      const auto node = g.cells[cell * npc + k];
+      op._nodes.push_back(node);
+      op._a.push_back(nm[k] + npl[k]);
+      op._b.push_back(0.5 * g.thickness * (npl[k] - nm[k]));
+      for (int i = 0; i < 3; ++i)
+        op._n.push_back(g.normals[3 * node + i]);
+    }
+  }
+  return op;
+}
+
+void CouplingOperator::interpolate(std::span<const double> u, std::span<double> v) const
+{
+  const std::size_t np = size();
+  for (std::size_t p = 0; p < np; ++p)
+  {
+    double out[3] = {0, 0, 0};
+    for (int k = 0; k < _npc; ++k)
+    {
+      const std::size_t q = p * _npc + k;
+      const double* uj = &u[6 * _nodes[q]];
+      const double* w = uj + 3;
+      const double* n = &_n[3 * q];
+      const double wxn[3] = {w[1] * n[2] - w[2] * n[1], w[2] * n[0] - w[0] * n[2],
+                             w[0] * n[1] - w[1] * n[0]};
+      for (int i = 0; i < 3; ++i)
+        out[i] += _a[q] * uj[i] + _b[q] * wxn[i];
+    }
+    for (int i = 0; i < 3; ++i)
+      v[3 * p + i] = out[i];
+  }
+}
+
+void CouplingOperator::add_transpose(std::span<const double> f, std::span<double> fs) const
+{
+  const std::size_t np = size();
+  for (std::size_t p = 0; p < np; ++p)
+  {
+    const double* fp = &f[3 * p];
+    for (int k = 0; k < _npc; ++k)
+    {
+      const std::size_t q = p * _npc + k;
+      double* out = &fs[6 * _nodes[q]];
+      const double* n = &_n[3 * q];
+      // <b (w x n), f> = <w, b (n x f)>: the moment is b n x f
+      const double nxf[3] = {n[1] * fp[2] - n[2] * fp[1], n[2] * fp[0] - n[0] * fp[2],
+                             n[0] * fp[1] - n[1] * fp[0]};
+      for (int i = 0; i < 3; ++i)
+      {
+        out[i] += _a[q] * fp[i];
+        out[3 + i] += _b[q] * nxf[i];
+      }
+    }
+  }
+}
+
+} // namespace dembridge::bridge
