@@ -195,3 +195,100 @@ TEST_CASE("Figure 6: points outside every element or inside two are placed and c
   std::vector<double> far{0.2, 0.1, 0.5};
   CHECK_THROWS_WITH(bridge::locate(g, far), Contains("particle 0") && Contains("no fictive element"));
 }
+
+#include "dembridge/bridge/multipliers.h"
+
+TEST_CASE("multipliers: constraint exact, momentum kept, no kinetic energy created", "[bridge]")
+{
+  for (auto cell : {shell::Cell::quadrilateral, shell::Cell::triangle})
+  {
+    const auto m = panel(cell, 0.3, shell::Placement::rotation_about({1, 0, 1}, 0.3, {0.2, 0.1, 0}));
+    const auto g = geometry(m);
+    const auto s = sample_points(g, 150, 21);
+    const auto op = bridge::locate(g, s.x);
+    std::mt19937 gen(4);
+    std::uniform_real_distribution<double> r(-1, 1), mass(0.5e-3, 2e-3);
+    std::vector<double> m_de(op.size()), v_de(3 * op.size());
+    for (auto& x : m_de)
+      x = mass(gen);
+    for (auto& x : v_de)
+      x = r(gen);
+    auto m_fe = m.lumped_mass();
+    for (auto& x : m_fe)
+      x *= 0.5 + 0.5 * std::abs(r(gen)); // weighted masses, weights in [0.5, 1]
+    std::vector<double> v_fe(m.num_dofs());
+    for (auto& x : v_fe)
+      x = r(gen);
+    const double dt = 1e-6;
+    bridge::MultiplierSolver solver(op, m_de, m_fe, dt);
+
+    auto momentum = [&](const std::vector<double>& vd, const std::vector<double>& vf)
+    {
+      // linear and angular (about the origin) momentum of both sides
+      std::array<double, 6> P{0, 0, 0, 0, 0, 0};
+      auto add = [&](const double* x, const double* mv, const double* Iw)
+      {
+        for (int i = 0; i < 3; ++i)
+          P[i] += mv[i];
+        P[3] += x[1] * mv[2] - x[2] * mv[1] + (Iw ? Iw[0] : 0.0);
+        P[4] += x[2] * mv[0] - x[0] * mv[2] + (Iw ? Iw[1] : 0.0);
+        P[5] += x[0] * mv[1] - x[1] * mv[0] + (Iw ? Iw[2] : 0.0);
+      };
+      for (std::size_t p = 0; p < op.size(); ++p)
+      {
+        const double mv[3] = {m_de[p] * vd[3 * p], m_de[p] * vd[3 * p + 1], m_de[p] * vd[3 * p + 2]};
+        add(&s.x[3 * p], mv, nullptr);
+      }
+      const auto x = m.node_coordinates();
+      for (std::size_t k = 0; k < m.num_nodes(); ++k)
+      {
+        double mv[3], Iw[3];
+        for (int i = 0; i < 3; ++i)
+        {
+          mv[i] = m_fe[6 * k + i] * vf[6 * k + i];
+          Iw[i] = m_fe[6 * k + 3 + i] * vf[6 * k + 3 + i];
+        }
+        add(&x[3 * k], mv, Iw);
+      }
+      return P;
+    };
+    auto kinetic = [&](const std::vector<double>& vd, const std::vector<double>& vf)
+    {
+      double e = 0.0;
+      for (std::size_t p = 0; p < op.size(); ++p)
+        for (int i = 0; i < 3; ++i)
+          e += 0.5 * m_de[p] * vd[3 * p + i] * vd[3 * p + i];
+      for (std::size_t i = 0; i < vf.size(); ++i)
+        e += 0.5 * m_fe[i] * vf[i] * vf[i];
+      return e;
+    };
+    const auto P0 = momentum(v_de, v_fe);
+    const double K0 = kinetic(v_de, v_fe);
+    const double res = solver.correct(v_de, v_fe);
+    // the constraint holds to the solver's round-off (velocities are O(1))
+    CHECK(res < 1e-10);
+    const auto P1 = momentum(v_de, v_fe);
+    for (int i = 0; i < 6; ++i)
+      CHECK(std::abs(P1[i] - P0[i]) < 1e-12 * (std::abs(P0[i]) + 1e-3));
+    // an M-orthogonal projection onto the constraint: kinetic energy can
+    // only drop
+    CHECK(kinetic(v_de, v_fe) <= K0 * (1 + 1e-14));
+    // a second correction has nothing left to do
+    const auto before = v_de;
+    solver.correct(v_de, v_fe);
+    for (std::size_t i = 0; i < v_de.size(); ++i)
+      CHECK(std::abs(v_de[i] - before[i]) < 1e-10);
+  }
+}
+
+TEST_CASE("multipliers: bad masses are refused", "[bridge][errors]")
+{
+  const auto m = panel(shell::Cell::quadrilateral, 0.0, {});
+  const auto g = geometry(m);
+  const auto s = sample_points(g, 5, 2);
+  const auto op = bridge::locate(g, s.x);
+  std::vector<double> m_de(5, 1e-3), m_fe = m.lumped_mass();
+  m_de[2] = 0.0;
+  CHECK_THROWS_WITH(bridge::MultiplierSolver(op, m_de, m_fe, 1e-6),
+                    Contains("constrained particle 2") && Contains("weight floor"));
+}

@@ -60,6 +60,12 @@ public:
   std::span<const std::int32_t> cells() const { return _cell; }
   /// Reference coordinates of each point in its element, (points, 3).
   std::span<const double> reference() const { return _ref; }
+  /// Shell nodes, weights a and b, and node normals of each point's row,
+  /// (points, npc) and (points, npc, 3).
+  std::span<const std::int32_t> nodes() const { return _nodes; }
+  std::span<const double> a() const { return _a; }
+  std::span<const double> b() const { return _b; }
+  std::span<const double> normals() const { return _n; }
   std::size_t outside() const { return _outside; }   ///< placed by the nearest rule
   std::size_t ambiguous() const { return _ambiguous; } ///< inside several elements
 
