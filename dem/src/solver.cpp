@@ -87,11 +87,12 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     const double delta = D - l.d0[k];
     const NormalForce nf = link_normal_force(delta, l.delta_max[k], law);
     double* fs_old = &l.fs[3 * k];
+    const double wk = l.weight.empty() ? 1.0 : l.weight[k];
     if (nf.state == NormalState::broken)
     {
       l.state[k] = LinkState::broken_tension;
       l.delta_max[k] = nf.delta_max;
-      c.breakage += 0.5 * dot3(fs_old, fs_old) / law.ks;
+      c.breakage += wk * 0.5 * dot3(fs_old, fs_old) / law.ks;
       std::fill(fs_old, fs_old + 3, 0.0);
       continue;
     }
@@ -108,8 +109,8 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       // Mohr-Coulomb reached: the link breaks and its elastic energy is
       // released; if the spheres touch, a contact takes over from zero shear.
       l.state[k] = LinkState::broken_shear;
-      c.breakage += 0.5 * nf.fn * delta + 0.5 * (sf.fs[0] * sf.fs[0] + sf.fs[1] * sf.fs[1]
-                                                 + sf.fs[2] * sf.fs[2]) / law.ks;
+      c.breakage += wk * (0.5 * nf.fn * delta + 0.5 * (sf.fs[0] * sf.fs[0] + sf.fs[1] * sf.fs[1]
+                                                       + sf.fs[2] * sf.fs[2]) / law.ks);
       std::fill(fs_old, fs_old + 3, 0.0);
       continue;
     }
@@ -118,7 +119,10 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       fs_old[q] = sf.fs[q];
       l.n[3 * k + q] = n[q];
     }
-    apply(p, i, j, n, nf.fn, sf.fs, la, lb);
+    if (wk == 1.0)
+      apply(p, i, j, n, nf.fn, sf.fs, la, lb);
+    else
+      apply(p, i, j, n, wk * nf.fn, {wk * sf.fs[0], wk * sf.fs[1], wk * sf.fs[2]}, la, lb);
   }
 
   // contacts between spheres without an intact link
@@ -158,14 +162,15 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     if (nl.touching[q])
       fs_rot = rotate_shear({fs_old[0], fs_old[1], fs_old[2]}, ra, rb, fa, nn);
     const ShearForce sf = contact_shear_force(fs_rot, du_s, fn, law);
-    c.friction += sf.slip_energy;
+    const double wq = p.weight.empty() ? 1.0 : 0.5 * (p.weight[i] + p.weight[j]);
+    c.friction += wq * sf.slip_energy;
     for (int k = 0; k < 3; ++k)
     {
       fs_old[k] = sf.fs[k];
       nl.n[3 * q + k] = n[k];
     }
     nl.touching[q] = 1;
-    apply(p, i, j, n, fn, sf.fs, la, lb);
+    apply(p, i, j, n, wq * fn, {wq * sf.fs[0], wq * sf.fs[1], wq * sf.fs[2]}, la, lb);
   }
 }
 
@@ -188,7 +193,8 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
     law.s_int = l.s_int[k];
     const double delta = std::sqrt(dot3(d, d)) - l.d0[k];
     const double fn = link_normal_force(delta, l.delta_max[k], law).fn;
-    e += 0.5 * fn * delta + 0.5 * dot3(&l.fs[3 * k], &l.fs[3 * k]) / law.ks;
+    const double wk = l.weight.empty() ? 1.0 : l.weight[k];
+    e += wk * (0.5 * fn * delta + 0.5 * dot3(&l.fs[3 * k], &l.fs[3 * k]) / law.ks);
   }
   const ContactFactors cf = contact_factors(mat);
   for (std::size_t q = 0; q < nl.size(); ++q)
@@ -205,9 +211,10 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
     const double rs = p.r[i] + p.r[j];
     const double gap = rs - std::sqrt(dot3(d, d));
     const double kn = mat.youngs_modulus * interaction_surface(p.r[i], p.r[j]) / rs * cf.cn;
+    const double wq = p.weight.empty() ? 1.0 : 0.5 * (p.weight[i] + p.weight[j]);
     if (gap > 0.0)
-      e += 0.5 * kn * gap * gap;
-    e += 0.5 * dot3(&nl.fs[3 * q], &nl.fs[3 * q]) / (kn * cf.cs);
+      e += wq * 0.5 * kn * gap * gap;
+    e += wq * 0.5 * dot3(&nl.fs[3 * q], &nl.fs[3 * q]) / (kn * cf.cs);
   }
   return e;
 }
@@ -223,7 +230,7 @@ double softening_energy(const Links& l, const Material& mat)
     law.kn = l.kn[k];
     law.ks = l.ks[k];
     law.s_int = l.s_int[k];
-    e += softening_dissipation(l.delta_max[k], law);
+    e += (l.weight.empty() ? 1.0 : l.weight[k]) * softening_dissipation(l.delta_max[k], law);
   }
   return e;
 }
@@ -240,7 +247,8 @@ double critical_time_step(const Particles& p, const Links& l)
     if (l.state[k] != LinkState::intact)
       continue;
     const std::int32_t i = l.a[k], j = l.b[k];
-    const double kt = std::max(l.kn[k], l.ks[k]), ks = l.ks[k];
+    const double wk = l.weight.empty() ? 1.0 : l.weight[k];
+    const double kt = wk * std::max(l.kn[k], l.ks[k]), ks = wk * l.ks[k];
     const double la = l.d0[k] * p.r[i] / (p.r[i] + p.r[j]), lb = l.d0[k] - la;
     const double mi = p.m[i], mj = p.m[j], Ii = p.inertia[i], Ij = p.inertia[j];
     rt[i] += kt / mi + kt / std::sqrt(mi * mj) + ks * la / std::sqrt(mi * Ii) + ks * lb / std::sqrt(mi * Ij);
@@ -362,9 +370,15 @@ void DemSolver::kick(double h)
 
 void DemSolver::step()
 {
+  begin_step();
+  end_step();
+}
+
+void DemSolver::begin_step()
+{
   const std::size_t n = _p.size();
   const double dt = _dt, t_new = _t + dt;
-  std::vector<double>& v_old = _reac; // reused as scratch: v(n) on held dofs
+  std::vector<double>& v_old = _reac; // scratch until end_step: v(n)
   for (std::size_t i = 0; i < 3 * n; ++i)
   {
     _fold[i] = _p.f[i] + _fext[i];
@@ -386,6 +400,17 @@ void DemSolver::step()
                   ? m.value(_t + 0.5 * dt)
                   : (_p.x0[3 * i + k] + m.value(t_new) - _p.x[3 * i + k]) / dt;
       }
+  _in_step = true;
+}
+
+void DemSolver::end_step()
+{
+  if (!_in_step)
+    throw std::runtime_error("DemSolver::end_step without begin_step");
+  _in_step = false;
+  const std::size_t n = _p.size();
+  const double dt = _dt, t_new = _t + dt;
+  const std::vector<double>& v_old = _reac;
   double w_ext = 0.0, w_damp = 0.0;
   std::vector<double> fext_old = _fext;
   external(_forces, t_new, _fext);

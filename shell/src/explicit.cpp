@@ -91,6 +91,7 @@ ExplicitSolver::ExplicitSolver(std::vector<double> mass, InternalForceFn f_int,
   _fext.assign(n, 0.0);
   _fext_new.assign(n, 0.0);
   _r.assign(n, 0.0);
+  _v_old.assign(n, 0.0);
   _prescribed.assign(n, 0);
 }
 
@@ -168,46 +169,52 @@ void ExplicitSolver::set_state(std::span<const double> u, std::span<const double
   _e.initial = e.kinetic + e.strain;
 }
 
-void ExplicitSolver::step()
+void ExplicitSolver::begin_step()
 {
   const std::size_t n = _m.size();
   const double dt = _dt, t_new = _t + dt;
-  // Net force at the old time on every dof, for reactions: m a = f + R.
-  // Kept in _r until the reactions are formed.
+  // net force at the old time (for reactions: m a = f + R) and v(n)
   for (std::size_t i = 0; i < n; ++i)
-    _r[i] = _fext[i] - _fint[i];
-
-  // Half-step velocity on free dofs, then the motions.
-  std::vector<double>& vh = _a; // reuse: a(n) is consumed here
-  for (std::size_t i = 0; i < n; ++i)
-    vh[i] = _prescribed[i] ? 0.0 : _v[i] + 0.5 * dt * _a[i];
-  for (const auto& m : _motions)
   {
+    _r[i] = _fext[i] - _fint[i];
+    _v_old[i] = _v[i];
+  }
+  // half-step velocity on free dofs, then the motions
+  for (std::size_t i = 0; i < n; ++i)
+    _v[i] = _prescribed[i] ? 0.0 : _v[i] + 0.5 * dt * _a[i];
+  for (const auto& m : _motions)
     for (auto d : m.dofs)
-    {
       switch (m.kind)
       {
       case MotionKind::fixed:
-        vh[d] = 0.0;
+        _v[d] = 0.0;
         break;
       case MotionKind::velocity:
-        vh[d] = m.value(_t + 0.5 * dt);
+        _v[d] = m.value(_t + 0.5 * dt);
         break;
       case MotionKind::displacement:
-        vh[d] = (m.value(t_new) - _u[d]) / dt;
+        _v[d] = (m.value(t_new) - _u[d]) / dt;
         break;
       }
-    }
-  }
+  _in_step = true;
+}
 
+void ExplicitSolver::end_step()
+{
+  if (!_in_step)
+    throw std::runtime_error("ExplicitSolver::end_step without begin_step");
+  _in_step = false;
+  const std::size_t n = _m.size();
+  const double dt = _dt, t_new = _t + dt;
   double w_ext = 0.0, w_damp = 0.0;
   external_forces(t_new, _fext_new);
   for (std::size_t i = 0; i < n; ++i)
   {
-    const double du = dt * vh[i];
+    const double vh = _v[i];
+    const double du = dt * vh;
     _u[i] += du;
     w_ext += du * 0.5 * (_fext[i] + _fext_new[i]);
-    w_damp += dt * _c * _m[i] * vh[i] * vh[i];
+    w_damp += dt * _c * _m[i] * vh * vh;
   }
   _f_int(_u, _fint);
   std::swap(_fext, _fext_new);
@@ -215,24 +222,21 @@ void ExplicitSolver::step()
   double w_presc = 0.0;
   for (std::size_t i = 0; i < n; ++i)
   {
-    const double fnet = _fext[i] - _fint[i] - _c * _m[i] * vh[i];
+    const double vh = _v[i];
+    const double fnet = _fext[i] - _fint[i] - _c * _m[i] * vh;
     if (!_prescribed[i])
     {
-      const double a = fnet / _m[i];
-      _v[i] = vh[i] + 0.5 * dt * a;
+      _a[i] = fnet / _m[i];
+      _v[i] = vh + 0.5 * dt * _a[i];
       _r[i] = 0.0;
-      vh[i] = a; // _a now holds a(n+1)
     }
     else
     {
-      const double v_old = _v[i];
-      _v[i] = vh[i];
       // reaction: m (v_new - v_old) = dt/2 (f_old + f_new) + dt R
-      const double r = _m[i] * (_v[i] - v_old) / dt
-                       - 0.5 * (_r[i] - _c * _m[i] * vh[i] + fnet);
-      w_presc += dt * vh[i] * r;
+      const double r = _m[i] * (vh - _v_old[i]) / dt - 0.5 * (_r[i] - _c * _m[i] * vh + fnet);
+      w_presc += dt * vh * r;
       _r[i] = r;
-      vh[i] = 0.0;
+      _a[i] = 0.0;
     }
   }
   for (const auto& m : _motions)
@@ -260,6 +264,12 @@ void ExplicitSolver::step()
         << "): the run is unstable; reduce the time step or check the loads";
     throw std::runtime_error(msg.str());
   }
+}
+
+void ExplicitSolver::step()
+{
+  begin_step();
+  end_step();
 }
 
 EnergyBudget ExplicitSolver::energy() const

@@ -43,6 +43,9 @@ struct Particles
   std::vector<double> r;        ///< radius [m]
   std::vector<double> m;        ///< mass [kg]
   std::vector<double> inertia;  ///< moment of inertia 2/5 m r^2 [kg m^2]
+  /// Energy weight of each sphere (1 - eta of the coupling); contacts use the
+  /// mean of their two spheres'. Empty: 1 everywhere.
+  std::vector<double> weight;
   std::size_t size() const { return r.size(); }
 };
 
@@ -72,6 +75,9 @@ struct Links
   std::vector<double> n;          ///< unit normal a -> b at the last step, (n, 3)
   std::vector<double> delta_max;  ///< largest elongation reached [m]
   std::vector<LinkState> state;
+  /// Energy weight of each link (1 - eta at its mid-point, bridging domain):
+  /// it multiplies the link's forces and energies. Empty: 1 everywhere.
+  std::vector<double> weight;
   std::size_t size() const { return a.size(); }
   std::size_t count(LinkState s) const;
 };

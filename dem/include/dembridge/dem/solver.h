@@ -102,9 +102,14 @@ public:
   void add_force(ParticleForce f);
   /// Computes the initial forces and energy (call after the conditions).
   void start();
-  /// One step. @throws std::runtime_error naming the particle and time if a
-  /// position or velocity becomes NaN or infinite.
+  /// One step (begin_step then end_step). @throws std::runtime_error naming
+  /// the particle and time if a position or velocity becomes NaN or infinite.
   void step();
+  /// First half of a step: velocities become v(n+1/2) (those that move the
+  /// spheres); a coupling may correct them (Particles::v) before end_step().
+  void begin_step();
+  /// Second half: positions, neighbours, forces, v(n+1), bookkeeping.
+  void end_step();
 
   DemEnergy energy() const;
   /// Sum of the reaction forces the condition `name` applies [N].
@@ -128,6 +133,7 @@ private:
   std::vector<double> _fext, _reac, _fold, _rot;
   double _dt, _c, _t = 0.0;
   std::int64_t _steps = 0;
+  bool _in_step = false;
   DemEnergy _e;
 };
 

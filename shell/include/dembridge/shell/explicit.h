@@ -106,9 +106,17 @@ public:
   /// Sets u and v at the current time (default zero) and evaluates a(0).
   void set_state(std::span<const double> u, std::span<const double> v);
 
-  /// Advances one step. Throws std::runtime_error naming the dof and time if
-  /// a non-finite value appears.
+  /// Advances one step (begin_step then end_step). Throws
+  /// std::runtime_error naming the dof and time if a non-finite value appears.
   void step();
+  /// First half of a step: v becomes the half-step velocity v(n+1/2) (the
+  /// velocities that move the positions); a coupling may correct it through
+  /// v_mut() before end_step().
+  void begin_step();
+  /// Second half: u(n+1) = u(n) + dt v(n+1/2), forces, v(n+1), bookkeeping.
+  void end_step();
+  /// Velocities, writable (between begin_step and end_step: v(n+1/2)).
+  std::span<double> v_mut() { return _v; }
 
   double time() const { return _t; }
   std::int64_t steps() const { return _steps; }
@@ -127,7 +135,8 @@ private:
   void external_forces(double t, std::span<double> f) const;
   void impose(double t, bool half);
 
-  std::vector<double> _m, _u, _v, _a, _fint, _fext, _fext_new, _r;
+  std::vector<double> _m, _u, _v, _a, _fint, _fext, _fext_new, _r, _v_old;
+  bool _in_step = false;
   std::vector<char> _prescribed;
   InternalForceFn _f_int;
   std::vector<PrescribedMotion> _motions;
