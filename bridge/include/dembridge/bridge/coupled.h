@@ -1,0 +1,95 @@
+#pragma once
+/// @file coupled.h
+/// The explicit bridging-domain coupling of a DE assembly with a shell
+/// (METHOD.md sections 3 and 4): energy weights on both sides, the particles
+/// of the overlap tied to the shell's motion through fictive elements, and
+/// one step = both sides' half kicks, the multiplier correction of the
+/// half-step velocities, then both sides' drift, forces and second half kick.
+///
+/// Weights: eta from the overlap (1 on the FE side, 0 on the DE side).
+/// FE: internal forces weighted inside the elements (the UFL weight field),
+/// lumped masses max(eta, floor) M. DE: masses and inertias max(1 - eta,
+/// floor) m, link forces and energies (1 - eta) at the link mid-point,
+/// contacts by the mean weight of their spheres.
+/// Shell dofs held by boundary conditions must lie outside the overlap.
+
+#include "dembridge/bridge/fictive.h"
+#include "dembridge/bridge/multipliers.h"
+#include "dembridge/bridge/weight.h"
+#include "dembridge/dem/solver.h"
+#include "dembridge/shell/explicit.h"
+#include "dembridge/shell/model.h"
+
+#include <memory>
+
+namespace dembridge::bridge
+{
+
+struct CouplingOptions
+{
+  PlanarOverlap overlap;
+  double weight_floor = 1e-3;   ///< in (0, 1)
+  double dt = 0.0;              ///< [s]; 0 = safety x min(dt_FE, dt_DE)
+  double safety = 0.5;          ///< the constraint lowers the stable step below either side's
+  double damping_fe = 0.0;      ///< mass-proportional damping of the shell [1/s]
+  double damping_de = 0.0;      ///< velocity-proportional damping of the spheres [1/s]
+  double skin = 0.0;            ///< DEM neighbour skin [m]; 0 = Rmin / 2
+};
+
+/// Energy of the coupled system [J]: the FE and DE budgets of each side
+/// (weighted masses and energies). The multipliers do work on each side,
+/// `multiplier_work_fe` = dt lambda . G_FE v_FE on the shell and exactly the
+/// opposite on the particles (the constraint holds after each correction), so
+/// each side's imbalance carries it and their sum closes.
+struct CoupledEnergy
+{
+  shell::EnergyBudget fe;
+  dem::DemEnergy de;
+  double multiplier_work_fe = 0.0;
+  double total() const { return fe.kinetic + fe.strain + de.kinetic + de.elastic; }
+  double imbalance() const { return fe.imbalance() + de.imbalance(); }
+};
+
+class CoupledSolver
+{
+public:
+  /// Sets the weights on both sides (the model's weight field, the particles'
+  /// masses, the links' weights), locates the particles of the overlap and
+  /// factorises the multiplier matrix.
+  /// @throws std::runtime_error: no particle in the overlap, an overlap
+  ///   outside the FE mesh, a particle in no fictive element, bad weights or a
+  ///   time step above the coupled estimate.
+  CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& l, const dem::Material& mat,
+                const CouplingOptions& o);
+  ~CoupledSolver();
+
+  shell::ExplicitSolver& fe() { return *_fe_solver; }
+  dem::DemSolver& de() { return *_de_solver; }
+
+  /// Initial state of the shell (u, v over its dofs; particles keep theirs),
+  /// made compatible by one correction, then both sides start.
+  void start(std::span<const double> u_fe, std::span<const double> v_fe);
+  /// One coupled step; returns the constraint residual after the correction [m/s].
+  double step();
+
+  double dt() const { return _dt; }
+  double dt_fe() const { return _dt_fe; }  ///< critical step of the weighted shell alone
+  double dt_de() const { return _dt_de; }  ///< critical step bound of the weighted DE alone
+  std::size_t constrained() const { return _ids.size(); }
+  const CouplingOperator& coupling() const { return _op; }
+  CoupledEnergy energy() const;
+
+private:
+  void correct();
+  shell::FEModel& _model;
+  dem::Particles& _p;
+  std::vector<std::int32_t> _ids;  // constrained particles
+  CouplingOperator _op;
+  std::vector<double> _m_fe, _m_de, _v_de;
+  std::unique_ptr<MultiplierSolver> _mult;
+  std::unique_ptr<shell::ExplicitSolver> _fe_solver;
+  std::unique_ptr<dem::DemSolver> _de_solver;
+  double _dt = 0.0, _dt_fe = 0.0, _dt_de = 0.0, _multiplier_energy = 0.0, _residual = 0.0;
+};
+
+} // namespace dembridge::bridge
