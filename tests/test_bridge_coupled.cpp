@@ -8,6 +8,7 @@
 #include <cmath>
 #include <mpi.h>
 #include <numbers>
+#include <random>
 // after DOLFINx headers (INFO)
 #include <catch2/catch.hpp>
 
@@ -30,7 +31,11 @@ Bar make_bar(shell::Cell cell)
   const double w = 0.05, h = 0.05;
   shell::Material sm;
   sm.thickness = h;
-  auto mesh = shell::create_shell_rectangle(MPI_COMM_WORLD, 0.12, w, 12, 5, cell);
+  const bool is_solid = cell == shell::Cell::hexahedron || cell == shell::Cell::tetrahedron;
+  auto mesh = is_solid ? shell::create_solid_box(MPI_COMM_WORLD, {0.12, w, h}, {12, 5, 5}, cell,
+                                              shell::Placement::rotation_about({1, 0, 0}, 0.0,
+                                                                               {0.0, 0.0, -0.5 * h}))
+                    : shell::create_shell_rectangle(MPI_COMM_WORLD, 0.12, w, 12, 5, cell);
   b.fe = std::make_unique<shell::FEModel>(mesh, sm);
   dem::PackingOptions po;
   po.mean_radius = 3e-3;
@@ -48,7 +53,7 @@ Bar make_bar(shell::Cell cell)
 
 TEST_CASE("coupled bar: constraint after every step, energy kept", "[bridge][coupled]")
 {
-  for (auto cell : {shell::Cell::quadrilateral, shell::Cell::triangle})
+  for (auto cell : {shell::Cell::quadrilateral, shell::Cell::triangle, shell::Cell::hexahedron})
   {
     auto b = make_bar(cell);
     bridge::CouplingOptions o;
@@ -57,7 +62,7 @@ TEST_CASE("coupled bar: constraint after every step, energy kept", "[bridge][cou
     REQUIRE(s.constrained() > 0);
     CHECK(s.coupling().outside() == 0);
     CHECK(s.dt() <= 0.5 * std::min(s.dt_fe(), s.dt_de()));
-    const int bs = 6;
+    const int bs = b.fe->block_size();
     const auto x = b.fe->node_coordinates();
     std::vector<std::int32_t> clamp;
     for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
@@ -113,4 +118,57 @@ TEST_CASE("coupled solver: bad set-ups are refused", "[bridge][coupled][errors]"
   o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
   o.dt = 1.0;
   CHECK_THROWS_WITH(bridge::CoupledSolver(*c.fe, c.p, c.l, c.mat, o), Contains("above the coupled estimate"));
+}
+
+TEST_CASE("solid coupling: a rigid motion of the solid moves the particles rigidly", "[bridge]")
+{
+  // P1 tetrahedra and trilinear hexahedra reproduce affine fields exactly
+  const std::array<double, 3> c{0.1, 0.2, -0.3}, th{0.4, -0.2, 0.6};
+  for (auto cell : {shell::Cell::hexahedron, shell::Cell::tetrahedron})
+  {
+    auto mesh = shell::create_solid_box(MPI_COMM_WORLD, {0.2, 0.1, 0.1}, {4, 2, 2}, cell,
+                                        shell::Placement::rotation_about({1, 1, 0}, 0.5, {1, 0, 0}));
+    shell::FEModel m(mesh, shell::Material{});
+    const auto x = m.node_coordinates();
+    // points: random convex combinations of random cells' nodes
+    std::mt19937 gen(7);
+    std::uniform_real_distribution<double> u01(0.05, 1.0);
+    std::uniform_int_distribution<int> pick(0, int(m.num_cells()) - 1);
+    std::vector<double> pts;
+    for (int i = 0; i < 200; ++i)
+    {
+      const int cc = pick(gen);
+      double wsum = 0.0, p[3] = {0, 0, 0};
+      for (int k = 0; k < m.nodes_per_cell(); ++k)
+      {
+        const double w = u01(gen);
+        wsum += w;
+        for (int d = 0; d < 3; ++d)
+          p[d] += w * x[3 * m.cell_nodes()[cc * m.nodes_per_cell() + k] + d];
+      }
+      for (double& v : p)
+        v /= wsum;
+      pts.insert(pts.end(), p, p + 3);
+    }
+    const auto op = bridge::locate_in_solid(x, m.cell_nodes(), m.nodes_per_cell(), pts);
+    CHECK(op.outside() == 0);
+    std::vector<double> u(3 * m.num_nodes()), v(pts.size());
+    for (std::size_t k = 0; k < m.num_nodes(); ++k)
+    {
+      const double* p = &x[3 * k];
+      u[3 * k] = c[0] + th[1] * p[2] - th[2] * p[1];
+      u[3 * k + 1] = c[1] + th[2] * p[0] - th[0] * p[2];
+      u[3 * k + 2] = c[2] + th[0] * p[1] - th[1] * p[0];
+    }
+    op.interpolate(u, v);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < pts.size() / 3; ++i)
+    {
+      const double* p = &pts[3 * i];
+      worst = std::max({worst, std::abs(v[3 * i] - (c[0] + th[1] * p[2] - th[2] * p[1])),
+                        std::abs(v[3 * i + 1] - (c[1] + th[2] * p[0] - th[0] * p[2])),
+                        std::abs(v[3 * i + 2] - (c[2] + th[0] * p[1] - th[1] * p[0]))});
+    }
+    CHECK(worst < 1e-12);
+  }
 }

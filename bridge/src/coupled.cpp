@@ -13,8 +13,6 @@ CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& 
     : _model(fe), _p(p)
 {
   o.overlap.validate();
-  if (!fe.is_shell())
-    throw std::runtime_error("CoupledSolver couples a shell model (solids: not yet)");
   const double floor = o.weight_floor;
   (void)floored(0.5, floor); // validates the floor
   // FE side: weight field and weighted lumped masses
@@ -33,9 +31,10 @@ CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& 
                              "inside the shell's region");
   fe.set_weight(eta);
   _m_fe = fe.lumped_mass();
+  const int bs = fe.block_size();
   for (std::size_t k = 0; k < nn; ++k)
-    for (int c = 0; c < 6; ++c)
-      _m_fe[6 * k + c] *= floored(eta[k], floor);
+    for (int c = 0; c < bs; ++c)
+      _m_fe[bs * k + c] *= floored(eta[k], floor);
   // DE side: masses, sphere and link weights
   const std::size_t np = p.size();
   p.weight.resize(np);
@@ -63,8 +62,11 @@ CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& 
   std::vector<double> pts;
   for (auto i : _ids)
     pts.insert(pts.end(), {p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2]});
-  _op = locate({x, fe.nodal_normals(), fe.cell_nodes(), fe.nodes_per_cell(), fe.material().thickness},
-               pts);
+  _op = fe.is_shell()
+            ? locate({x, fe.nodal_normals(), fe.cell_nodes(), fe.nodes_per_cell(),
+                      fe.material().thickness},
+                     pts)
+            : locate_in_solid(x, fe.cell_nodes(), fe.nodes_per_cell(), pts);
   // time step
   _dt_fe = fe.critical_time_step(_m_fe);
   _dt_de = dem::critical_time_step(p, l);

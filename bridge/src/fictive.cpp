@@ -281,7 +281,13 @@ void CouplingOperator::interpolate(std::span<const double> u, std::span<double> 
     for (int k = 0; k < _npc; ++k)
     {
       const std::size_t q = p * _npc + k;
-      const double* uj = &u[6 * _nodes[q]];
+      const double* uj = &u[_bs * _nodes[q]];
+      if (_bs == 3)
+      {
+        for (int i = 0; i < 3; ++i)
+          out[i] += _a[q] * uj[i];
+        continue;
+      }
       const double* w = uj + 3;
       const double* n = &_n[3 * q];
       const double wxn[3] = {w[1] * n[2] - w[2] * n[1], w[2] * n[0] - w[0] * n[2],
@@ -303,7 +309,13 @@ void CouplingOperator::add_transpose(std::span<const double> f, std::span<double
     for (int k = 0; k < _npc; ++k)
     {
       const std::size_t q = p * _npc + k;
-      double* out = &fs[6 * _nodes[q]];
+      double* out = &fs[_bs * _nodes[q]];
+      if (_bs == 3)
+      {
+        for (int i = 0; i < 3; ++i)
+          out[i] += _a[q] * fp[i];
+        continue;
+      }
       const double* n = &_n[3 * q];
       // <b (w x n), f> = <w, b (n x f)>: the moment is b n x f
       const double nxf[3] = {n[1] * fp[2] - n[2] * fp[1], n[2] * fp[0] - n[0] * fp[2],
@@ -315,6 +327,208 @@ void CouplingOperator::add_transpose(std::span<const double> f, std::span<double
       }
     }
   }
+}
+
+namespace
+{
+/// P1 solid cell: shape functions at reference r (tet: barycentric on the
+/// unit simplex; hex: trilinear on [0, 1]^3, tensor order).
+void solid_shape(int npc, const V3& r, double* N, double (*dN)[3])
+{
+  if (npc == 4)
+  {
+    N[0] = 1.0 - r[0] - r[1] - r[2];
+    N[1] = r[0];
+    N[2] = r[1];
+    N[3] = r[2];
+    const double d[4][3] = {{-1, -1, -1}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int k = 0; k < 4; ++k)
+      for (int i = 0; i < 3; ++i)
+        dN[k][i] = d[k][i];
+    return;
+  }
+  for (int k = 0; k < 8; ++k)
+  {
+    const int bx = k & 1, by = (k >> 1) & 1, bz = (k >> 2) & 1;
+    const double fx = bx ? r[0] : 1 - r[0], fy = by ? r[1] : 1 - r[1], fz = bz ? r[2] : 1 - r[2];
+    const double gx = bx ? 1 : -1, gy = by ? 1 : -1, gz = bz ? 1 : -1;
+    N[k] = fx * fy * fz;
+    dN[k][0] = gx * fy * fz;
+    dN[k][1] = fx * gy * fz;
+    dN[k][2] = fx * fy * gz;
+  }
+}
+
+bool solid_invert(int npc, const double (*X)[3], const V3& p, V3& r)
+{
+  r = npc == 4 ? V3{0.25, 0.25, 0.25} : V3{0.5, 0.5, 0.5};
+  for (int it = 0; it < 50; ++it)
+  {
+    double N[8], dN[8][3];
+    solid_shape(npc, r, N, dN);
+    double x[3] = {0, 0, 0}, J[3][3] = {};
+    for (int k = 0; k < npc; ++k)
+      for (int i = 0; i < 3; ++i)
+      {
+        x[i] += N[k] * X[k][i];
+        for (int j = 0; j < 3; ++j)
+          J[i][j] += dN[k][j] * X[k][i];
+      }
+    const double res[3] = {p[0] - x[0], p[1] - x[1], p[2] - x[2]};
+    const double det = J[0][0] * (J[1][1] * J[2][2] - J[1][2] * J[2][1])
+                       - J[0][1] * (J[1][0] * J[2][2] - J[1][2] * J[2][0])
+                       + J[0][2] * (J[1][0] * J[2][1] - J[1][1] * J[2][0]);
+    if (!(std::abs(det) > 0.0))
+      return false;
+    double d[3];
+    for (int col = 0; col < 3; ++col)
+    {
+      double M[3][3];
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          M[i][j] = j == col ? res[i] : J[i][j];
+      d[col] = (M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1])
+                - M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0])
+                + M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0]))
+               / det;
+    }
+    for (int i = 0; i < 3; ++i)
+      r[i] += d[i];
+    if (std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]) < 1e-14)
+      break;
+  }
+  return std::isfinite(r[0]) && std::isfinite(r[1]) && std::isfinite(r[2]);
+}
+
+double solid_margin(int npc, const V3& r)
+{
+  if (npc == 4)
+    return std::min({r[0], r[1], r[2], 1.0 - r[0] - r[1] - r[2]});
+  return std::min({r[0], r[1], r[2], 1.0 - r[0], 1.0 - r[1], 1.0 - r[2]});
+}
+
+V3 solid_clamp(int npc, V3 r)
+{
+  for (auto& c : r)
+    c = std::clamp(c, 0.0, 1.0);
+  if (npc == 4)
+  {
+    const double s = r[0] + r[1] + r[2];
+    if (s > 1.0)
+      for (auto& c : r)
+        c /= s;
+  }
+  return r;
+}
+} // namespace
+
+CouplingOperator locate_in_solid(std::span<const double> x, std::span<const std::int32_t> cells,
+                                 int npc, std::span<const double> points, const LocateOptions& opt)
+{
+  if (npc != 4 && npc != 8)
+    throw std::runtime_error("solid coupling needs P1 tetrahedra (4 nodes) or hexahedra (8)");
+  const std::size_t ncell = cells.size() / npc, np = points.size() / 3;
+  std::vector<std::array<double, 6>> box(ncell);
+  double size = 0.0;
+  for (std::size_t c = 0; c < ncell; ++c)
+  {
+    auto& b = box[c];
+    b = {1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
+    for (int k = 0; k < npc; ++k)
+      for (int i = 0; i < 3; ++i)
+      {
+        const double v = x[3 * cells[c * npc + k] + i];
+        b[i] = std::min(b[i], v);
+        b[3 + i] = std::max(b[3 + i], v);
+      }
+    for (int i = 0; i < 3; ++i)
+      size = std::max(size, b[3 + i] - b[i]);
+  }
+  const double maxd = opt.max_distance >= 0.0 ? opt.max_distance : 0.1 * size;
+  CouplingOperator op;
+  op._npc = npc;
+  op._bs = 3;
+  for (std::size_t p = 0; p < np; ++p)
+  {
+    const V3 pt{points[3 * p], points[3 * p + 1], points[3 * p + 2]};
+    int best_in = -1, best_out = -1, inside = 0;
+    double best_margin = -1e300, best_dist = 1e300;
+    V3 ref_in{}, ref_out{};
+    for (std::size_t c = 0; c < ncell; ++c)
+    {
+      const auto& b = box[c];
+      double out = 0.0;
+      for (int i = 0; i < 3; ++i)
+        out = std::max({out, b[i] - pt[i], pt[i] - b[3 + i]});
+      if (out > maxd)
+        continue;
+      double X[8][3];
+      for (int k = 0; k < npc; ++k)
+        for (int i = 0; i < 3; ++i)
+          X[k][i] = x[3 * cells[c * npc + k] + i];
+      V3 r;
+      if (!solid_invert(npc, X, pt, r))
+        continue;
+      const double m = solid_margin(npc, r);
+      if (m >= -opt.tolerance)
+      {
+        ++inside;
+        if (m > best_margin)
+        {
+          best_margin = m;
+          best_in = static_cast<int>(c);
+          ref_in = r;
+        }
+      }
+      else if (best_in < 0)
+      {
+        const V3 rc = solid_clamp(npc, r);
+        double N[8], dN[8][3];
+        solid_shape(npc, rc, N, dN);
+        V3 y{0, 0, 0};
+        for (int k = 0; k < npc; ++k)
+          for (int i = 0; i < 3; ++i)
+            y[i] += N[k] * X[k][i];
+        const double d = std::hypot(y[0] - pt[0], y[1] - pt[1], y[2] - pt[2]);
+        if (d < best_dist)
+        {
+          best_dist = d;
+          best_out = static_cast<int>(c);
+          ref_out = rc;
+        }
+      }
+    }
+    int cell = best_in;
+    V3 ref = ref_in;
+    if (cell < 0)
+    {
+      if (best_out < 0 || best_dist > maxd)
+      {
+        std::ostringstream s;
+        s << "particle " << p << " at (" << pt[0] << ", " << pt[1] << ", " << pt[2]
+          << ") lies in no solid element and is farther than " << maxd
+          << " m from all of them: check the overlap region against the FE mesh";
+        throw std::runtime_error(s.str());
+      }
+      cell = best_out;
+      ref = ref_out;
+      ++op._outside;
+    }
+    else if (inside > 1)
+      ++op._ambiguous;
+    op._cell.push_back(cell);
+    op._ref.insert(op._ref.end(), ref.begin(), ref.end());
+    double N[8], dN[8][3];
+    solid_shape(npc, ref, N, dN);
+    for (int k = 0; k < npc; ++k)
+    {
+      op._nodes.push_back(cells[cell * npc + k]);
+      op._a.push_back(N[k]);
+      op._b.push_back(0.0);
+      op._n.insert(op._n.end(), {0.0, 0.0, 0.0});
+    }
+  }
+  return op;
 }
 
 } // namespace dembridge::bridge

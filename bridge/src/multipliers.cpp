@@ -56,6 +56,7 @@ MultiplierSolver::MultiplierSolver(const CouplingOperator& op, std::span<const d
       throw std::runtime_error("multipliers: weighted mass of shell dof " + std::to_string(i)
                                + " must be > 0 (use a weight floor)");
   const int npc = op.nodes_per_cell();
+  const int bs = op.block_size();
   // rows of G_FE grouped by shell node: node -> list of (point, local k)
   std::map<std::int32_t, std::vector<std::pair<std::size_t, int>>> by_node;
   const auto nodes = op.nodes();
@@ -68,7 +69,7 @@ MultiplierSolver::MultiplierSolver(const CouplingOperator& op, std::span<const d
       trip.emplace_back(3 * p + i, 3 * p + i, dt / m_de[p]);
   for (const auto& [node, rows] : by_node)
   {
-    const double* M = &m_fe[6 * node];
+    const double* M = &m_fe[bs * node];
     for (const auto& [p, k] : rows)
     {
       double Gp[3][6];
@@ -81,7 +82,7 @@ MultiplierSolver::MultiplierSolver(const CouplingOperator& op, std::span<const d
           for (int j = 0; j < 3; ++j)
           {
             double s = 0.0;
-            for (int c = 0; c < 6; ++c)
+            for (int c = 0; c < bs; ++c)
               s += Gp[i][c] * Gq[j][c] / M[c];
             if (s != 0.0)
               trip.emplace_back(3 * p + i, 3 * q + j, dt * s);

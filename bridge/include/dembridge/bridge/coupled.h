@@ -1,7 +1,7 @@
 #pragma once
 /// @file coupled.h
-/// The explicit bridging-domain coupling of a DE assembly with a shell
-/// (METHOD.md sections 3 and 4): energy weights on both sides, the particles
+/// The explicit bridging-domain coupling of a DE assembly with a shell or a
+/// 3D solid FE model (METHOD.md sections 3 and 4): energy weights on both sides, the particles
 /// of the overlap tied to the shell's motion through fictive elements, and
 /// one step = both sides' half kicks, the multiplier correction of the
 /// half-step velocities, then both sides' drift, forces and second half kick.

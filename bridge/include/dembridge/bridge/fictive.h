@@ -57,6 +57,8 @@ class CouplingOperator
 public:
   std::size_t size() const { return _cell.size(); }
   int nodes_per_cell() const { return _npc; }
+  /// Dofs per FE node: 6 for shells (translations, rotations), 3 for solids.
+  int block_size() const { return _bs; }
   std::span<const std::int32_t> cells() const { return _cell; }
   /// Reference coordinates of each point in its element, (points, 3).
   std::span<const double> reference() const { return _ref; }
@@ -69,17 +71,19 @@ public:
   std::size_t outside() const { return _outside; }   ///< placed by the nearest rule
   std::size_t ambiguous() const { return _ambiguous; } ///< inside several elements
 
-  /// v (points, 3) = G_FE u, with u the shell dofs (nodes, 6): translations
-  /// then rotations (or their rates), global frame.
+  /// v (points, 3) = G_FE u, with u the FE dofs (nodes, block_size): for
+  /// shells translations then rotations (or their rates), global frame.
   void interpolate(std::span<const double> u, std::span<double> v) const;
-  /// f_shell (nodes, 6) += G_FE^T f (points, 3): forces and moments on the
-  /// shell nodes equivalent to the point forces f.
+  /// f_fe (nodes, block_size) += G_FE^T f (points, 3): forces (and moments)
+  /// on the FE nodes equivalent to the point forces f.
   void add_transpose(std::span<const double> f, std::span<double> f_shell) const;
 
 private:
   friend CouplingOperator locate(const ShellGeometry&, std::span<const double>,
                                  const LocateOptions&);
-  int _npc = 4;
+  friend CouplingOperator locate_in_solid(std::span<const double>, std::span<const std::int32_t>,
+                                          int, std::span<const double>, const LocateOptions&);
+  int _npc = 4, _bs = 6;
   std::vector<std::int32_t> _cell, _nodes; // nodes: (points, npc)
   std::vector<double> _a, _b;              // (points, npc)
   std::vector<double> _n;                  // normals of the nodes, (points, npc, 3)
@@ -93,5 +97,14 @@ private:
 ///   or on bad geometry (thickness <= 0, npc not 3 or 4).
 CouplingOperator locate(const ShellGeometry& g, std::span<const double> points,
                         const LocateOptions& opt = {});
+
+/// Locates the points in the cells of a 3D solid mesh (P1 tetrahedra, 4
+/// nodes, or hexahedra, 8 nodes in tensor order) and builds G_FE for 3 dofs
+/// per node (v_i = sum_J N_J(x_i) v_J). Same rules as `locate` for points in
+/// several cells or in none (max_distance < 0: the largest cell size / 10).
+/// @param x node coordinates (nodes, 3); @param cells (cells, npc)
+CouplingOperator locate_in_solid(std::span<const double> x, std::span<const std::int32_t> cells,
+                                 int nodes_per_cell, std::span<const double> points,
+                                 const LocateOptions& opt = {});
 
 } // namespace dembridge::bridge
