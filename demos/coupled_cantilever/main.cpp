@@ -11,7 +11,8 @@
 // Sample runs:
 //   build/bin/coupled_cantilever --load axial --output out/coupled --summary out/coupled.json
 //   build/bin/coupled_cantilever --load bending --periods 2
-// Output: DIR/shell.xdmf (shell fields), DIR/particles.xdmf (spheres), DIR/history.csv.
+//   build/bin/coupled_cantilever --fe solid --load bending
+// Output: DIR/shell.xdmf (FE fields), DIR/particles.xdmf (spheres), DIR/history.csv.
 #include "cantilever.h"
 #include "support.h"
 
@@ -40,8 +41,11 @@ int main(int argc, char** argv)
   material_file = DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json";
   CLI::App app{"Coupled shell / DE cantilever in free vibration", "coupled_cantilever"};
   app.add_option("--load", load, "axial | bending (first cantilever mode shape)")->capture_default_str();
-  app.add_option("--fe", fe_kind, "shell (solid: not yet)")->capture_default_str();
-  app.add_option("--cell", cell, "triangle | quadrilateral")->capture_default_str();
+  app.add_option("--fe", fe_kind, "shell | solid")->capture_default_str();
+  app.add_option("--cell", cell, "triangle | quadrilateral (shell); hexahedron | tetrahedron (solid)")
+      ->capture_default_str();
+  int nz = 5;
+  app.add_option("--nz", nz, "solid divisions through the thickness")->capture_default_str();
   app.add_option("--length", length, "bar length [m]")->capture_default_str();
   app.add_option("--width", width, "side of the square section = shell thickness [m]")->capture_default_str();
   app.add_option("--fe-length", fe_length, "shell region: x in [0, fe-length] [m]")->capture_default_str();
@@ -63,8 +67,11 @@ int main(int argc, char** argv)
   {
     demo::echo_options(app);
     demo::Stopwatch clock;
-    if (fe_kind != "shell")
-      throw std::runtime_error("--fe " + fe_kind + ": only shell is coupled so far");
+    if (fe_kind != "shell" && fe_kind != "solid")
+      throw std::runtime_error("--fe " + fe_kind + ": allowed are shell, solid");
+    const bool solid = fe_kind == "solid";
+    if (solid && (cell == "quadrilateral" || cell == "triangle"))
+      cell = "hexahedron";
     if (load != "axial" && load != "bending")
       throw std::runtime_error("load '" + load + "': allowed are axial, bending");
     if (!(de_start < fe_length && fe_length < length && de_start > 0.0))
@@ -81,8 +88,12 @@ int main(int argc, char** argv)
     std::cout << "# shell material: E " << sm.youngs_modulus << " Pa, nu " << sm.poisson_ratio
               << ", rho " << sm.density << " kg/m^3 (measured on the DE sample)\n";
 
-    auto mesh = shell::create_shell_rectangle(MPI_COMM_WORLD, fe_length, width, nx, ny,
-                                              shell::parse_cell(cell));
+    auto mesh = solid ? shell::create_solid_box(MPI_COMM_WORLD, {fe_length, width, width},
+                                                {nx, ny, nz}, shell::parse_cell(cell),
+                                                shell::Placement::rotation_about(
+                                                    {1, 0, 0}, 0.0, {0.0, 0.0, -0.5 * width}))
+                      : shell::create_shell_rectangle(MPI_COMM_WORLD, fe_length, width, nx, ny,
+                                                      shell::parse_cell(cell));
     shell::FEModel fe(mesh, sm);
     dem::PackingOptions po;
     po.mean_radius = mean_radius;
@@ -90,10 +101,10 @@ int main(int argc, char** argv)
     const double h = width;
     const auto region = dem::box_region({de_start, 0.0, -0.5 * h}, {length, width, 0.5 * h});
     const auto pk = dem::generate_packing(region, po);
-    double solid = 0.0;
+    double solid_volume = 0.0;
     for (double r : pk.r)
-      solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-    auto p = dem::make_particles(pk.x, pk.r, mat.density, solid / region.volume);
+      solid_volume += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    auto p = dem::make_particles(pk.x, pk.r, mat.density, solid_volume / region.volume);
     auto links = dem::create_links(p, dem::lambda_for_mean_links(p.x, p.r, mf.links_per_sphere), mat);
 
     bridge::CouplingOptions o;
@@ -107,11 +118,12 @@ int main(int argc, char** argv)
 
     // clamp, initial shape (cantilever mode of the whole bar)
     const auto x = fe.node_coordinates();
+    const int bs = fe.block_size();
     std::vector<std::int32_t> clamp;
     for (std::size_t k = 0; k < fe.num_nodes(); ++k)
       if (x[3 * k] < 1e-9 * length)
-        for (int c = 0; c < 6; ++c)
-          clamp.push_back(k * 6 + c);
+        for (int c = 0; c < bs; ++c)
+          clamp.push_back(k * bs + c);
     s.fe().add_motion({"clamp", clamp, shell::MotionKind::fixed, {}});
     const bool axial = load == "axial";
     auto shape = [&](double xx) {
@@ -123,11 +135,14 @@ int main(int argc, char** argv)
     for (std::size_t k = 0; k < fe.num_nodes(); ++k)
     {
       if (axial)
-        u[6 * k] = amplitude * shape(x[3 * k]);
+        u[bs * k] = amplitude * shape(x[3 * k]);
       else
       {
-        u[6 * k + 2] = amplitude * shape(x[3 * k]);
-        u[6 * k + 4] = -amplitude * slope(x[3 * k]);
+        u[bs * k + 2] = amplitude * shape(x[3 * k]);
+        if (solid)
+          u[bs * k] = -amplitude * slope(x[3 * k]) * x[3 * k + 2];
+        else
+          u[bs * k + 4] = -amplitude * slope(x[3 * k]);
       }
     }
     for (std::size_t i = 0; i < p.size(); ++i)
@@ -152,6 +167,7 @@ int main(int argc, char** argv)
     ref.width = width;
     ref.nx = static_cast<int>(std::round(nx * length / fe_length));
     ref.ny = ny;
+    ref.nz = nz;
     ref.material = sm;
     ref.quiet = true;
     ref.periods = 3.0;
