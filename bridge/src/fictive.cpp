@@ -141,6 +141,85 @@ V3 clamp(int npc, V3 r)
   }
   return r;
 }
+/// Result of the search for the element of one point.
+struct Found
+{
+  int cell = -1;      ///< -1: none within reach
+  V3 ref{};           ///< reference coordinates (clamped for outside points)
+  bool outside = false, ambiguous = false;
+  double distance = 0.0; ///< to the nearest element, for outside points
+};
+
+/// The element of point pt among cells with bounding boxes `box` (the rules
+/// of the paper's Figure 6, see fictive.h): deepest of those containing it,
+/// else the nearest (reference coordinates clamped) within max_distance.
+/// invert(c, pt, r) -> bool, margin(r) -> double (>= 0 inside),
+/// nearest(c, r) -> {clamped r, its physical point}.
+template <typename Invert, typename Margin, typename Nearest>
+Found find_cell(const V3& pt, const std::vector<std::array<double, 6>>& box, double maxd,
+                double tol, Invert&& invert, Margin&& margin, Nearest&& nearest)
+{
+  Found f;
+  int inside = 0, best_out = -1;
+  double best_margin = -1e300, best_dist = 1e300;
+  V3 ref_out{};
+  for (std::size_t c = 0; c < box.size(); ++c)
+  {
+    const auto& b = box[c];
+    double out = 0.0;
+    for (int i = 0; i < 3; ++i)
+      out = std::max({out, b[i] - pt[i], pt[i] - b[3 + i]});
+    if (out > maxd)
+      continue;
+    V3 r;
+    if (!invert(c, pt, r))
+      continue;
+    const double m = margin(r);
+    if (m >= -tol)
+    {
+      ++inside;
+      if (m > best_margin)
+      {
+        best_margin = m;
+        f.cell = static_cast<int>(c);
+        f.ref = r;
+      }
+    }
+    else if (f.cell < 0)
+    {
+      const auto [rc, y] = nearest(c, r);
+      const double d = std::hypot(y[0] - pt[0], y[1] - pt[1], y[2] - pt[2]);
+      if (d < best_dist)
+      {
+        best_dist = d;
+        best_out = static_cast<int>(c);
+        ref_out = rc;
+      }
+    }
+  }
+  if (f.cell >= 0)
+  {
+    f.ambiguous = inside > 1;
+    return f;
+  }
+  f.distance = best_dist;
+  if (best_out >= 0 && best_dist <= maxd)
+  {
+    f.cell = best_out;
+    f.ref = ref_out;
+    f.outside = true;
+  }
+  return f;
+}
+
+[[noreturn]] void unplaced(std::size_t p, const V3& x, double maxd, const char* what)
+{
+  std::ostringstream s;
+  s << "particle " << p << " at (" << x[0] << ", " << x[1] << ", " << x[2] << ") lies in no "
+    << what << " element and is farther than " << maxd
+    << " m from all of them: check the overlap region against the FE mesh";
+  throw std::runtime_error(s.str());
+}
 } // namespace
 
 std::vector<double> fictive_nodes(const ShellGeometry& g)
@@ -199,62 +278,20 @@ CouplingOperator locate(const ShellGeometry& g, std::span<const double> points,
   for (std::size_t p = 0; p < np; ++p)
   {
     const V3 x{points[3 * p], points[3 * p + 1], points[3 * p + 2]};
-    int best_in = -1, best_out = -1, inside = 0;
-    double best_margin = -1e300, best_dist = 1e300;
-    V3 ref_in{}, ref_out{};
-    for (std::size_t c = 0; c < ncell; ++c)
-    {
-      const auto& b = box[c];
-      double out = 0.0;
-      for (int i = 0; i < 3; ++i)
-        out = std::max({out, b[i] - x[i], x[i] - b[3 + i]});
-      if (out > maxd)
-        continue;
-      V3 r;
-      if (!invert(el[c], x, r))
-        continue;
-      const double m = margin(npc, r);
-      if (m >= -tol)
-      {
-        ++inside;
-        if (m > best_margin)
+    const Found f = find_cell(
+        x, box, maxd, tol, [&](std::size_t c, const V3& pt, V3& r) { return invert(el[c], pt, r); },
+        [&](const V3& r) { return margin(npc, r); },
+        [&](std::size_t c, const V3& r)
         {
-          best_margin = m;
-          best_in = static_cast<int>(c);
-          ref_in = r;
-        }
-      }
-      else if (best_in < 0)
-      {
-        const V3 rc = clamp(npc, r);
-        const V3 y = map(el[c], rc[0], rc[1], rc[2]);
-        const double d = std::hypot(y[0] - x[0], y[1] - x[1], y[2] - x[2]);
-        if (d < best_dist)
-        {
-          best_dist = d;
-          best_out = static_cast<int>(c);
-          ref_out = rc;
-        }
-      }
-    }
-    int cell = best_in;
-    V3 ref = ref_in;
-    if (cell < 0)
-    {
-      if (best_out < 0 || best_dist > maxd)
-      {
-        std::ostringstream s;
-        s << "particle " << p << " at (" << x[0] << ", " << x[1] << ", " << x[2]
-          << ") lies in no fictive element and is farther than " << maxd
-          << " m from all of them: check the overlap region against the shell mesh";
-        throw std::runtime_error(s.str());
-      }
-      cell = best_out;
-      ref = ref_out;
-      ++op._outside;
-    }
-    else if (inside > 1)
-      ++op._ambiguous;
+          const V3 rc = clamp(npc, r);
+          return std::pair{rc, map(el[c], rc[0], rc[1], rc[2])};
+        });
+    if (f.cell < 0)
+      unplaced(p, x, maxd, "fictive");
+    op._outside += f.outside;
+    op._ambiguous += f.ambiguous;
+    const int cell = f.cell;
+    const V3 ref = f.ref;
     op._cell.push_back(cell);
     op._ref.insert(op._ref.end(), ref.begin(), ref.end());
     double nm[4], npl[4];
@@ -451,71 +488,39 @@ CouplingOperator locate_in_solid(std::span<const double> x, std::span<const std:
   for (std::size_t p = 0; p < np; ++p)
   {
     const V3 pt{points[3 * p], points[3 * p + 1], points[3 * p + 2]};
-    int best_in = -1, best_out = -1, inside = 0;
-    double best_margin = -1e300, best_dist = 1e300;
-    V3 ref_in{}, ref_out{};
-    for (std::size_t c = 0; c < ncell; ++c)
+    auto nodes_of = [&](std::size_t c, double (*X)[3])
     {
-      const auto& b = box[c];
-      double out = 0.0;
-      for (int i = 0; i < 3; ++i)
-        out = std::max({out, b[i] - pt[i], pt[i] - b[3 + i]});
-      if (out > maxd)
-        continue;
-      double X[8][3];
       for (int k = 0; k < npc; ++k)
         for (int i = 0; i < 3; ++i)
           X[k][i] = x[3 * cells[c * npc + k] + i];
-      V3 r;
-      if (!solid_invert(npc, X, pt, r))
-        continue;
-      const double m = solid_margin(npc, r);
-      if (m >= -opt.tolerance)
-      {
-        ++inside;
-        if (m > best_margin)
+    };
+    const Found f = find_cell(
+        pt, box, maxd, opt.tolerance,
+        [&](std::size_t c, const V3& q, V3& r)
         {
-          best_margin = m;
-          best_in = static_cast<int>(c);
-          ref_in = r;
-        }
-      }
-      else if (best_in < 0)
-      {
-        const V3 rc = solid_clamp(npc, r);
-        double N[8], dN[8][3];
-        solid_shape(npc, rc, N, dN);
-        V3 y{0, 0, 0};
-        for (int k = 0; k < npc; ++k)
-          for (int i = 0; i < 3; ++i)
-            y[i] += N[k] * X[k][i];
-        const double d = std::hypot(y[0] - pt[0], y[1] - pt[1], y[2] - pt[2]);
-        if (d < best_dist)
+          double X[8][3];
+          nodes_of(c, X);
+          return solid_invert(npc, X, q, r);
+        },
+        [&](const V3& r) { return solid_margin(npc, r); },
+        [&](std::size_t c, const V3& r)
         {
-          best_dist = d;
-          best_out = static_cast<int>(c);
-          ref_out = rc;
-        }
-      }
-    }
-    int cell = best_in;
-    V3 ref = ref_in;
-    if (cell < 0)
-    {
-      if (best_out < 0 || best_dist > maxd)
-      {
-        std::ostringstream s;
-        s << "particle " << p << " at (" << pt[0] << ", " << pt[1] << ", " << pt[2]
-          << ") lies in no solid element and is farther than " << maxd
-          << " m from all of them: check the overlap region against the FE mesh";
-        throw std::runtime_error(s.str());
-      }
-      cell = best_out;
-      ref = ref_out;
-      ++op._outside;
-    }
-    else if (inside > 1)
-      ++op._ambiguous;
+          double X[8][3], N[8], dN[8][3];
+          nodes_of(c, X);
+          const V3 rc = solid_clamp(npc, r);
+          solid_shape(npc, rc, N, dN);
+          V3 y{0, 0, 0};
+          for (int k = 0; k < npc; ++k)
+            for (int i = 0; i < 3; ++i)
+              y[i] += N[k] * X[k][i];
+          return std::pair{rc, y};
+        });
+    if (f.cell < 0)
+      unplaced(p, pt, maxd, "solid");
+    op._outside += f.outside;
+    op._ambiguous += f.ambiguous;
+    const int cell = f.cell;
+    const V3 ref = f.ref;
     op._cell.push_back(cell);
     op._ref.insert(op._ref.end(), ref.begin(), ref.end());
     double N[8], dN[8][3];
