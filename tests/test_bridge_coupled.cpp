@@ -252,8 +252,11 @@ TEST_CASE("coupled bar: energy kept over 20 periods", "[bridge][coupled]")
   CHECK(drift < 5e-3);
 }
 
-TEST_CASE("wave transmission: a pulse crosses the overlap with little reflection",
-          "[bridge][coupled]")
+namespace
+{
+/// Runs the pulse test: from the shell into the DE (fe_to_de) or back;
+/// returns {reflected fraction, fraction that arrived on the far side}.
+std::pair<double, double> pulse(bool fe_to_de)
 {
   // Shell strip on [0, 0.3] m, DE box on [0.22, 0.5] m, overlap [0.22, 0.3]
   // (8 cm: about 13 mean DE diameters and 16 shell elements). A right-going
@@ -285,19 +288,30 @@ TEST_CASE("wave transmission: a pulse crosses the overlap with little reflection
   o.overlap = {{1.0, 0.0, 0.0}, xfe, xde};
   bridge::CoupledSolver s(fe, p, l, mat, o);
   // bell u(x) = A (1 + cos(2 pi (x - x0) / lp)) / 2 on |x - x0| < lp / 2,
-  // right-going: v = -c du/dx
-  const double c = std::sqrt(sm.youngs_modulus / sm.density), A = 1e-7, lp = 0.08, x0 = 0.1;
-  const auto x = fe.node_coordinates();
-  std::vector<double> u(fe.num_dofs(), 0.0), v(fe.num_dofs(), 0.0);
-  for (std::size_t k = 0; k < fe.num_nodes(); ++k)
+  // travelling towards the other side: v = -+ c du/dx
+  const double c = std::sqrt(sm.youngs_modulus / sm.density), A = 1e-7, lp = 0.08;
+  const double x0 = fe_to_de ? 0.1 : 0.42, dir = fe_to_de ? 1.0 : -1.0;
+  auto bell = [&](double xx, double& uu, double& vv)
   {
-    const double d = x[3 * k] - x0;
+    uu = vv = 0.0;
+    const double d = xx - x0;
     if (std::abs(d) < 0.5 * lp)
     {
       const double ph = 2.0 * std::numbers::pi * d / lp;
-      u[6 * k] = 0.5 * A * (1.0 + std::cos(ph));
-      v[6 * k] = c * 0.5 * A * 2.0 * std::numbers::pi / lp * std::sin(ph);
+      uu = 0.5 * A * (1.0 + std::cos(ph));
+      vv = dir * c * 0.5 * A * 2.0 * std::numbers::pi / lp * std::sin(ph);
     }
+  };
+  const auto x = fe.node_coordinates();
+  std::vector<double> u(fe.num_dofs(), 0.0), v(fe.num_dofs(), 0.0);
+  for (std::size_t k = 0; k < fe.num_nodes(); ++k)
+    bell(x[3 * k], u[6 * k], v[6 * k]);
+  for (std::size_t i = 0; i < p.size(); ++i)
+  {
+    double uu, vv;
+    bell(p.x0[3 * i], uu, vv);
+    p.x[3 * i] += uu;
+    p.v[3 * i] = vv;
   }
   s.start(u, v);
   const double e0 = s.energy().total();
@@ -305,21 +319,42 @@ TEST_CASE("wave transmission: a pulse crosses the overlap with little reflection
   const int steps = static_cast<int>((0.31 / c) / s.dt());
   for (int k = 0; k < steps; ++k)
     s.step();
-  // energy in the FE-only region x < xde: kinetic + strain ~ 2 x kinetic for
-  // travelling waves; use the lumped masses with their weights
+  // energy left in the region the pulse came from (FE-only x < xde, or
+  // DE-only x > xfe): kinetic + strain ~ 2 x kinetic for travelling waves
   const auto m = fe.lumped_mass();
   double ke = 0.0;
-  for (std::size_t k = 0; k < fe.num_nodes(); ++k)
-    if (x[3 * k] < xde - 0.01)
-      for (int d = 0; d < 3; ++d)
-        ke += 0.5 * m[6 * k + d] * s.fe().v()[6 * k + d] * s.fe().v()[6 * k + d];
-  const double reflected = 2.0 * ke / e0;
-  // where did the energy go: DE side kinetic + elastic
+  if (fe_to_de)
+  {
+    for (std::size_t k = 0; k < fe.num_nodes(); ++k)
+      if (x[3 * k] < xde - 0.01)
+        for (int d = 0; d < 3; ++d)
+          ke += 0.5 * m[6 * k + d] * s.fe().v()[6 * k + d] * s.fe().v()[6 * k + d];
+  }
+  else
+  {
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (p.x0[3 * i] > xfe + 0.01)
+        for (int d = 0; d < 3; ++d)
+          ke += 0.5 * p.m[i] * p.v[3 * i + d] * p.v[3 * i + d];
+  }
   const auto e = s.energy();
-  INFO(p.size() << " spheres, " << steps << " steps; reflected " << reflected << " E0, DE side "
-                << (e.de.kinetic + e.de.elastic) / e0 << " E0, total " << e.total() / e0);
+  const double arrived = fe_to_de ? (e.de.kinetic + e.de.elastic) / e0 : (e.fe.kinetic + e.fe.strain) / e0;
+  INFO("pulse " << (fe_to_de ? "FE -> DE" : "DE -> FE") << ": " << p.size() << " spheres, " << steps
+                << " steps; reflected " << 2.0 * ke / e0 << " E0, arrived " << arrived << " E0");
+  return {2.0 * ke / e0, arrived};
+}
+} // namespace
+
+TEST_CASE("wave transmission: a pulse crosses the overlap with little reflection",
+          "[bridge][coupled]")
+{
+  // reflected energy below 5 % (the issue's bound), most of it arrived.
+  // From the shell into the DE only: the way back (pulse(false)) measures
+  // 25 % "reflected", not yet understood (the DE pulse set-up near the free
+  // end may not be a clean one-way wave); an open point of the bridge issue.
+  const auto [reflected, arrived] = pulse(true);
   CHECK(reflected < 0.05);
-  CHECK((e.de.kinetic + e.de.elastic) / e0 > 0.8);
+  CHECK(arrived > 0.8);
 }
 
 TEST_CASE("the coupled model rotated and moved in space gives the same results", "[bridge][coupled]")
