@@ -274,6 +274,7 @@ DemSolver::DemSolver(Particles& p, Links& l, const Material& mat, double dt, dou
   set_damping(damping);
   _held.assign(6 * p.size(), 0);
   _fext.assign(3 * p.size(), 0.0);
+  _fext_old.assign(3 * p.size(), 0.0);
   _reac.assign(3 * p.size(), 0.0);
   _fold.assign(3 * p.size(), 0.0);
 }
@@ -412,8 +413,9 @@ void DemSolver::end_step()
   const double dt = _dt, t_new = _t + dt;
   const std::vector<double>& v_old = _reac;
   double w_ext = 0.0, w_damp = 0.0;
-  std::vector<double> fext_old = _fext;
+  std::swap(_fext_old, _fext); // no allocation in the step loop
   external(_forces, t_new, _fext);
+  const std::vector<double>& fext_old = _fext_old;
   for (std::size_t i = 0; i < n; ++i)
     for (int k = 0; k < 3; ++k)
     {

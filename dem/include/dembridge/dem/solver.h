@@ -130,7 +130,7 @@ private:
   std::vector<ParticleMotion> _motions;
   std::vector<ParticleForce> _forces;
   std::vector<std::uint8_t> _held;      // per particle and component: 1 if prescribed
-  std::vector<double> _fext, _reac, _fold, _rot;
+  std::vector<double> _fext, _fext_old, _reac, _fold, _rot;
   double _dt, _c, _t = 0.0;
   std::int64_t _steps = 0;
   bool _in_step = false;
