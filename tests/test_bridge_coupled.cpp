@@ -7,7 +7,9 @@
 
 #include <cmath>
 #include <mpi.h>
+#include <functional>
 #include <numbers>
+#include <numeric>
 #include <random>
 // after DOLFINx headers (INFO)
 #include <catch2/catch.hpp>
@@ -24,6 +26,16 @@ struct Bar
   dem::Links l;
   dem::Material mat;
 };
+
+/// All dofs of the FE nodes selected by pred (the clamped end).
+std::vector<std::int32_t> clamp_dofs(const shell::FEModel& fe,
+                                     const std::function<bool(const std::array<double, 3>&)>& pred)
+{
+  std::vector<int> all(fe.block_size());
+  std::iota(all.begin(), all.end(), 0);
+  return shell::node_dofs(shell::select_nodes(fe.node_coordinates(), pred, "clamped end"),
+                          fe.block_size(), all);
+}
 
 Bar make_bar(shell::Cell cell)
 {
@@ -64,11 +76,7 @@ TEST_CASE("coupled bar: constraint after every step, energy kept", "[bridge][cou
     CHECK(s.dt() <= 0.5 * std::min(s.dt_fe(), s.dt_de()));
     const int bs = b.fe->block_size();
     const auto x = b.fe->node_coordinates();
-    std::vector<std::int32_t> clamp;
-    for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
-      if (x[3 * k] < 1e-9)
-        for (int c = 0; c < bs; ++c)
-          clamp.push_back(k * bs + c);
+    const auto clamp = clamp_dofs(*b.fe, [](const auto& q) { return q[0] < 1e-9; });
     s.fe().add_motion({"clamp", clamp, shell::MotionKind::fixed, {}});
     // axial velocity sin(pi x / (2 L)) on both sides (first axial mode shape)
     const double L = 0.2, V = 1e-3;
@@ -227,11 +235,7 @@ TEST_CASE("coupled bar: energy kept over 20 periods", "[bridge][coupled]")
   o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
   bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
   const auto x = b.fe->node_coordinates();
-  std::vector<std::int32_t> clamp;
-  for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
-    if (x[3 * k] < 1e-9)
-      for (int c = 0; c < 6; ++c)
-        clamp.push_back(k * 6 + c);
+  const auto clamp = clamp_dofs(*b.fe, [](const auto& q) { return q[0] < 1e-9; });
   s.fe().add_motion({"clamp", clamp, shell::MotionKind::fixed, {}});
   std::vector<double> u(b.fe->num_dofs(), 0.0), v(b.fe->num_dofs(), 0.0);
   for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
@@ -392,13 +396,9 @@ TEST_CASE("the coupled model rotated and moved in space gives the same results",
     o.dt = 1e-7;
     bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
     const auto x = b.fe->node_coordinates();
-    std::vector<std::int32_t> clamp;
     auto axial = [&](const double* p)
     { return ax[0] * p[0] + ax[1] * p[1] + ax[2] * p[2] - s0; };
-    for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
-      if (std::abs(axial(&x[3 * k])) < 1e-9)
-        for (int c = 0; c < 6; ++c)
-          clamp.push_back(k * 6 + c);
+    const auto clamp = clamp_dofs(*b.fe, [&](const auto& q) { return std::abs(axial(q.data())) < 1e-9; });
     s.fe().add_motion({"clamp", clamp, shell::MotionKind::fixed, {}});
     std::vector<double> u(b.fe->num_dofs(), 0.0), v(b.fe->num_dofs(), 0.0);
     for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)

@@ -29,6 +29,7 @@
 #include <fstream>
 #include <iostream>
 #include <numbers>
+#include <numeric>
 
 int main(int argc, char** argv)
 {
@@ -119,11 +120,11 @@ int main(int argc, char** argv)
     // clamp, initial shape (cantilever mode of the whole bar)
     const auto x = fe.node_coordinates();
     const int bs = fe.block_size();
-    std::vector<std::int32_t> clamp;
-    for (std::size_t k = 0; k < fe.num_nodes(); ++k)
-      if (x[3 * k] < 1e-9 * length)
-        for (int c = 0; c < bs; ++c)
-          clamp.push_back(k * bs + c);
+    std::vector<int> all(bs);
+    std::iota(all.begin(), all.end(), 0);
+    const auto clamp = shell::node_dofs(
+        shell::select_nodes(x, [&](const auto& q) { return q[0] < 1e-9 * length; }, "clamped end x = 0"),
+        bs, all);
     s.fe().add_motion({"clamp", clamp, shell::MotionKind::fixed, {}});
     const bool axial = load == "axial";
     auto shape = [&](double xx) {
