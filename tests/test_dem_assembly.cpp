@@ -295,6 +295,51 @@ TEST_CASE("undamped elastic assembly: no energy drift over 10,000 steps", "[dem]
   CHECK(a.deviation / b.deviation < 4.8);
 }
 
+TEST_CASE("linearised stiffness action matches the force loop for small increments", "[dem]")
+{
+  // Displacements of 1e-9 m (1e-6 of a radius) and rotations of 1e-6 rad:
+  // the force loop's geometric nonlinearity (change of the normal, finite
+  // rotations) differs from K u by terms of relative order 1e-6.
+  auto p = lattice(4);
+  const Material m = concrete();
+  auto l = create_links(p, 1.4, m);
+  l.weight.assign(l.size(), 0.0);
+  for (std::size_t k = 0; k < l.size(); ++k)
+    l.weight[k] = 0.25 + 0.5 * (k % 3) / 2.0; // weights reach both paths
+  const std::size_t n = p.size();
+  std::mt19937 gen(11);
+  std::uniform_real_distribution<double> d(-1e-9, 1e-9), w(-1e-6, 1e-6);
+  std::vector<double> u(6 * n), ku(6 * n);
+  for (std::size_t i = 0; i < 3 * n; ++i)
+  {
+    u[i] = d(gen);
+    u[3 * n + i] = w(gen);
+  }
+  stiffness_action(p, l, u, ku);
+  const double dt = 1e-7;
+  for (std::size_t i = 0; i < 3 * n; ++i)
+  {
+    p.x[i] += u[i];
+    p.w[i] = u[3 * n + i] / dt; // compute_forces turns each sphere by w dt
+  }
+  NeighbourList nl(0.2e-3);
+  nl.update(p.x, p.r, l.a, l.b);
+  ForceCounters c;
+  compute_forces(p, l, nl, m, dt, c);
+  double fmax = 0.0, tmax = 0.0, ef = 0.0, et = 0.0;
+  for (std::size_t i = 0; i < 3 * n; ++i)
+  {
+    fmax = std::max(fmax, std::abs(ku[i]));
+    tmax = std::max(tmax, std::abs(ku[3 * n + i]));
+    ef = std::max(ef, std::abs(ku[i] + p.f[i]));
+    et = std::max(et, std::abs(ku[3 * n + i] + p.t[i]));
+  }
+  REQUIRE(fmax > 0.0);
+  REQUIRE(tmax > 0.0);
+  CHECK(ef < 1e-5 * fmax);
+  CHECK(et < 1e-5 * tmax);
+}
+
 TEST_CASE("critical time step: the Gershgorin bound is on the safe side", "[dem]")
 {
   // The Gershgorin bound is >= the true lambda_max: a step at 0.99 x the

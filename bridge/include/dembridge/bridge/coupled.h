@@ -29,8 +29,8 @@ struct CouplingOptions
 {
   PlanarOverlap overlap;
   double weight_floor = 1e-3;   ///< in (0, 1)
-  double dt = 0.0;              ///< [s]; 0 = safety x min(dt_FE, dt_DE)
-  double safety = 0.5;          ///< the constraint lowers the stable step below either side's
+  double dt = 0.0;              ///< [s]; 0 = safety x the coupled critical step
+  double safety = 0.8;          ///< fraction of the coupled critical step, in (0, 1]
   double damping_fe = 0.0;      ///< mass-proportional damping of the shell [1/s]
   double damping_de = 0.0;      ///< velocity-proportional damping of the spheres [1/s]
   double skin = 0.0;            ///< DEM neighbour skin [m]; 0 = Rmin / 2
@@ -49,6 +49,14 @@ struct CoupledEnergy
   double total() const { return fe.kinetic + fe.strain + de.kinetic + de.elastic; }
   double imbalance() const { return fe.imbalance() + de.imbalance(); }
 };
+
+/// Critical time step of a DE assembly alone [s]: 2 / sqrt(lambda_max) of
+/// its linearised link stiffness (translations and rotations, link weights
+/// included) over its masses and inertias, by power iteration (relative
+/// tolerance rtol on lambda). Sharper than dem::critical_time_step, the
+/// Gershgorin bound, which is on the safe side.
+double particle_critical_time_step(const dem::Particles& p, const dem::Links& l,
+                                   double rtol = 1e-6);
 
 class CoupledSolver
 {
@@ -73,14 +81,19 @@ public:
   double step();
 
   double dt() const { return _dt; }
-  double dt_fe() const { return _dt_fe; }  ///< critical step of the weighted shell alone
-  double dt_de() const { return _dt_de; }  ///< critical step bound of the weighted DE alone
+  /// Critical step of the coupled, weighted system [s]: 2 / sqrt(lambda_max)
+  /// of its stiffness over its masses on the motions that satisfy the
+  /// constraint, by power iteration with the multiplier correction as the
+  /// projection (boundary conditions left out, which is on the safe side).
+  double dt_coupled() const { return _dt_coupled; }
+  double dt_fe() const { return _dt_fe; }  ///< critical step of the FE model alone, unweighted
+  double dt_de() const { return _dt_de; }  ///< critical step of the DE assembly alone, unweighted
   std::size_t constrained() const { return _ids.size(); }
   const CouplingOperator& coupling() const { return _op; }
   CoupledEnergy energy() const;
 
 private:
-  void correct();
+  void correct(bool half_step);
   shell::FEModel& _model;
   dem::Particles& _p;
   std::vector<std::int32_t> _ids;  // constrained particles
@@ -89,7 +102,8 @@ private:
   std::unique_ptr<MultiplierSolver> _mult;
   std::unique_ptr<shell::ExplicitSolver> _fe_solver;
   std::unique_ptr<dem::DemSolver> _de_solver;
-  double _dt = 0.0, _dt_fe = 0.0, _dt_de = 0.0, _multiplier_energy = 0.0, _residual = 0.0;
+  double _dt = 0.0, _dt_coupled = 0.0, _dt_fe = 0.0, _dt_de = 0.0, _multiplier_energy = 0.0,
+         _residual = 0.0;
 };
 
 } // namespace dembridge::bridge

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <functional>
+#include <span>
 #include <string>
 
 namespace dembridge::dem
@@ -40,6 +41,15 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
 /// Energy dissipated by tensile softening of all links [J].
 double softening_energy(const Links& l, const Material& mat);
 
+/// Action of the linearised stiffness of the intact links about the current
+/// positions, f = K u (the links' weights included; contacts left out):
+/// u and f hold 6 values per particle, translations (n, 3) then rotations
+/// (n, 3) [m, rad -> N, N m]. The relative displacement of the link's contact
+/// point is (u_b - u_a) - (l_a theta_a + l_b theta_b) x n, its normal part
+/// resisted by K_n, its tangential part by K_s, as the law does for small
+/// increments. Used for the power-iteration estimates of the critical step.
+void stiffness_action(const Particles& p, const Links& l, std::span<const double> u,
+                      std::span<double> f);
 /// Upper bound of the largest eigenvalue of M^-1 K of the linearised
 /// assembly (links and current contacts; translations and rotations), by
 /// block Gershgorin on M^-1/2 K M^-1/2; the critical step is 2/sqrt(bound).
