@@ -343,7 +343,7 @@ TEST_CASE("coupled bar: energy kept over 20 periods", "[bridge][coupled]")
   for (std::size_t i = 0; i < b.p.size(); ++i)
     b.p.v[3 * i] = 1e-3 * std::sin(0.5 * std::numbers::pi * b.p.x[3 * i] / 0.2);
   s.start(u, v);
-  const double e0 = s.energy().total();
+  double e0 = s.energy().total();
   const int steps = static_cast<int>(20.0 / 4350.0 / s.dt());
   double drift = 0.0;
   for (int k = 0; k < steps; ++k)
@@ -408,21 +408,32 @@ std::pair<double, double> pulse(bool fe_to_de)
   };
   const auto x = fe.node_coordinates();
   std::vector<double> u(fe.num_dofs(), 0.0), v(fe.num_dofs(), 0.0);
-  for (std::size_t k = 0; k < fe.num_nodes(); ++k)
-    bell(x[3 * k], u[6 * k], v[6 * k]);
-  for (std::size_t i = 0; i < p.size(); ++i)
+  if (fe_to_de)
+    for (std::size_t k = 0; k < fe.num_nodes(); ++k)
+      bell(x[3 * k], u[6 * k], v[6 * k]);
+  else
   {
-    double uu, vv;
-    bell(p.x0[3 * i], uu, vv);
-    p.x[3 * i] += uu;
-    p.v[3 * i] = vv;
+    // into the DE from its free end: the end layer pushed along -x with a
+    // smooth velocity bell in time, lp / c long, then held (it is far from
+    // the overlap; whatever the overlap reflects is still on its way back
+    // when measured). A velocity field imposed on the particles themselves
+    // would strain the disordered packing non-affinely: vibrations that are
+    // no wave.
+    const double T = lp / c, V = A * std::numbers::pi / lp * c;
+    s.de().add_motion({"end", dem::DemSolver::select(p, [&](const auto& q) { return q[0] > L - 2 * po.mean_radius; }, "end"),
+                       dem::MotionKind::velocity, {true, false, false},
+                       [=](double t) { return t < T ? -V * 0.5 * (1.0 - std::cos(2.0 * std::numbers::pi * t / T)) : 0.0; }});
   }
   s.start(u, v);
-  const double e0 = s.energy().total();
-  // run until the pulse front has travelled to x ~ 0.45 (centre ~0.41)
-  const int steps = static_cast<int>((0.31 / c) / s.dt());
+  double e0 = s.energy().total();
+  // run until the pulse has crossed: centre from 0.1 to ~0.41, or from the
+  // the end (0.5 + lp / 2 at t = 0 for a bell in time) to ~0.04, in the
+  // FE-only region also if the DE wave is a little slower than c
+  const int steps = static_cast<int>(((fe_to_de ? 0.31 : 0.5) / c) / s.dt());
   for (int k = 0; k < steps; ++k)
     s.step();
+  if (!fe_to_de)
+    e0 = s.energy().de.prescribed_work; // what the end's motion put in
   // energy left in the region the pulse came from (FE-only x < xde, or
   // DE-only x > xfe): kinetic + strain ~ 2 x kinetic for travelling waves
   const auto m = fe.lumped_mass();
@@ -436,10 +447,30 @@ std::pair<double, double> pulse(bool fe_to_de)
   }
   else
   {
+    // the wave's kinetic energy in the DE: that of the mean velocity of
+    // slabs 1 cm thick (3 diameters, ~170 spheres each). The particles'
+    // own vibrations about it (excited at the start, where the bell's smooth
+    // displacement field strains the disordered packing non-affinely) do not
+    // travel as a wave and are no reflection.
+    const int nslab = static_cast<int>(std::round((L - xfe - 0.01) / 0.01));
+    std::vector<double> ms(nslab, 0.0), ps(3 * nslab, 0.0);
+    double raw = 0.0;
     for (std::size_t i = 0; i < p.size(); ++i)
       if (p.x0[3 * i] > xfe + 0.01)
+      {
+        const int k = std::min(nslab - 1, static_cast<int>((p.x0[3 * i] - xfe - 0.01) / 0.01));
+        ms[k] += p.m[i];
         for (int d = 0; d < 3; ++d)
-          ke += 0.5 * p.m[i] * p.v[3 * i + d] * p.v[3 * i + d];
+        {
+          ps[3 * k + d] += p.m[i] * p.v[3 * i + d];
+          raw += 0.5 * p.m[i] * p.v[3 * i + d] * p.v[3 * i + d];
+        }
+      }
+    for (int k = 0; k < nslab; ++k)
+      for (int d = 0; d < 3; ++d)
+        ke += 0.5 * ps[3 * k + d] * ps[3 * k + d] / ms[k];
+    UNSCOPED_INFO("particle kinetic energy left in the DE-only region " << raw / e0
+                  << " E0, of which the slabs' mean motion " << ke / e0 << " E0");
   }
   const auto e = s.energy();
   const double arrived = fe_to_de ? (e.de.kinetic + e.de.elastic) / e0 : (e.fe.kinetic + e.fe.strain) / e0;
@@ -453,12 +484,17 @@ TEST_CASE("wave transmission: a pulse crosses the overlap with little reflection
           "[bridge][coupled]")
 {
   // reflected energy below 5 % (the issue's bound), most of it arrived.
-  // From the shell into the DE only: the way back (pulse(false)) measures
-  // 25 % "reflected", not yet understood (the DE pulse set-up near the free
-  // end may not be a clean one-way wave); an open point of the bridge issue.
+  // Both ways: from the shell into the DE (measured: 2.5 % reflected, 83 %
+  // arrived) and from the DE's free end into the shell (2.1 % reflected as a
+  // wave, 83 % arrived; the DE-only region also keeps ~11 % as the
+  // particles' own vibrations, scattered by the disordered packing, and the
+  // overlap's projection filters what the shell cannot carry).
   const auto [reflected, arrived] = pulse(true);
   CHECK(reflected < 0.05);
   CHECK(arrived > 0.8);
+  const auto [back, arrived_back] = pulse(false);
+  CHECK(back < 0.05);
+  CHECK(arrived_back > 0.8);
 }
 
 TEST_CASE("the coupled model rotated and moved in space gives the same results", "[bridge][coupled]")
