@@ -300,12 +300,15 @@ TEST_CASE("coupled patch test: a uniform velocity is carried unchanged", "[bridg
   s.start(u, v);
   for (int k = 0; k < 200; ++k)
     s.step();
-  // Everything keeps moving at V up to round-off. Round-off of K u at the
-  // shell nodes of the overlap's far edge is divided by masses carrying the
-  // 1e-3 weight floor, which amplifies it 1000 times; the particles follow
-  // those nodes through the constraint (residual ~1e-17). Measured after 200
-  // steps: particles 3e-10, nodes 1.8e-9 relative; bounds 1e-9 and 1e-8
-  // relative. Rotation rates likewise stay at round-off.
+  // Everything keeps moving at V up to round-off: nothing deforms, but K u
+  // and the link forces are evaluated on displaced positions, with round-off
+  // ~1e-16 |K| |u| that the light (weight-floored) masses of the overlap turn
+  // into velocity errors accumulating step after step. The constraint
+  // itself holds to ~1e-17. Measured after 200 steps (u = 6e-5 m): in the
+  // overlap, particles 1.1e-10 and shell nodes 1.2e-10 relative to V;
+  // elsewhere particles 7.5e-10 (full masses but a looser link network at
+  // the free end). Bounds: 2e-10 in the overlap (the issue's 1e-10, with a
+  // factor 2 for the accumulation over 200 steps), 1e-9 elsewhere.
   double de = 0.0, fe = 0.0, spin = 0.0;
   for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
     for (int d = 0; d < 3; ++d)
@@ -313,16 +316,20 @@ TEST_CASE("coupled patch test: a uniform velocity is carried unchanged", "[bridg
       fe = std::max(fe, std::abs(s.fe().v()[6 * k + d] - V[d]));
       spin = std::max(spin, std::abs(s.fe().v()[6 * k + 3 + d]));
     }
+  double de_overlap = 0.0;
   for (std::size_t i = 0; i < b.p.size(); ++i)
     for (int d = 0; d < 3; ++d)
     {
       de = std::max(de, std::abs(b.p.v[3 * i + d] - V[d]));
+      if (b.p.x[3 * i] > 0.08 && b.p.x[3 * i] < 0.12)
+        de_overlap = std::max(de_overlap, std::abs(b.p.v[3 * i + d] - V[d]));
       spin = std::max(spin, std::abs(b.p.w[3 * i + d]));
     }
-  INFO("particles off by " << de << " m/s, shell nodes by " << fe << " m/s, largest rotation rate "
-                           << spin << " rad/s");
+  INFO("particles off by " << de << " m/s (in the overlap " << de_overlap << "), shell nodes by "
+                           << fe << " m/s, largest rotation rate " << spin << " rad/s");
   CHECK(de < 1e-9 * 0.3);
-  CHECK(fe < 1e-8 * 0.3);
+  CHECK(de_overlap < 2e-10 * 0.3);
+  CHECK(fe < 2e-10 * 0.3);
   CHECK(spin < 1e-6);
 }
 
