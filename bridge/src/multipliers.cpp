@@ -13,7 +13,16 @@ namespace dembridge::bridge
 
 struct MultiplierSolver::Factor
 {
+  // A^-1 by the Woodbury identity: A = dt (D + G W G^T), D = diag(1 / m_de),
+  // W = diag(1 / M_fe), so A^-1 = (D^-1 - D^-1 G K^-1 G^T D^-1) / dt with
+  // K = W^-1 + G^T D^-1 G over the FE dofs the overlap touches: as small
+  // as the overlap's shell nodes x 6, sparse, factorised once. Each solve
+  // then costs O(nonzeros of G) instead of a factor of the particles' A,
+  // which is nearly dense when many particles share an element.
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  std::vector<std::int32_t> dofs; // compact index -> FE dof
+  std::vector<double> full;       // FE-sized scratch
+  Eigen::VectorXd z;
 };
 
 namespace
@@ -57,44 +66,55 @@ MultiplierSolver::MultiplierSolver(const CouplingOperator& op, std::span<const d
                                + " must be > 0 (use a weight floor)");
   const int npc = op.nodes_per_cell();
   const int bs = op.block_size();
-  // rows of G_FE grouped by shell node: node -> list of (point, local k)
-  std::map<std::int32_t, std::vector<std::pair<std::size_t, int>>> by_node;
+  // FE dofs touched by the overlap, compact numbering
   const auto nodes = op.nodes();
-  for (std::size_t p = 0; p < np; ++p)
-    for (int k = 0; k < npc; ++k)
-      by_node[nodes[p * npc + k]].push_back({p, k});
+  std::map<std::int32_t, std::int32_t> compact; // node -> compact node index
+  for (auto n : nodes)
+    compact.emplace(n, 0);
+  std::int32_t k = 0;
+  for (auto& [n, c] : compact)
+    c = k++;
+  const std::int32_t ns = k * bs;
+  auto& F = *_factor;
+  F.dofs.resize(ns);
+  for (const auto& [n, c] : compact)
+    for (int d = 0; d < bs; ++d)
+      F.dofs[bs * c + d] = bs * n + d;
   std::vector<Eigen::Triplet<double>> trip;
+  for (std::int32_t i = 0; i < ns; ++i)
+    trip.emplace_back(i, i, m_fe[F.dofs[i]]);
+  // + sum over points of m_p G_p^T G_p (G_p: 3 x (npc bs))
+  std::vector<double> Gp(3 * npc * bs);
+  std::vector<std::int32_t> col(npc * bs);
   for (std::size_t p = 0; p < np; ++p)
-    for (int i = 0; i < 3; ++i)
-      trip.emplace_back(3 * p + i, 3 * p + i, dt / m_de[p]);
-  for (const auto& [node, rows] : by_node)
   {
-    const double* M = &m_fe[bs * node];
-    for (const auto& [p, k] : rows)
+    for (int kk = 0; kk < npc; ++kk)
     {
-      double Gp[3][6];
-      block(op.a()[p * npc + k], op.b()[p * npc + k], &op.normals()[3 * (p * npc + k)], Gp);
-      for (const auto& [q, l] : rows)
-      {
-        double Gq[3][6];
-        block(op.a()[q * npc + l], op.b()[q * npc + l], &op.normals()[3 * (q * npc + l)], Gq);
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j)
-          {
-            double s = 0.0;
-            for (int c = 0; c < bs; ++c)
-              s += Gp[i][c] * Gq[j][c] / M[c];
-            if (s != 0.0)
-              trip.emplace_back(3 * p + i, 3 * q + j, dt * s);
-          }
-      }
+      double G[3][6];
+      block(op.a()[p * npc + kk], op.b()[p * npc + kk], &op.normals()[3 * (p * npc + kk)], G);
+      for (int i = 0; i < 3; ++i)
+        for (int d = 0; d < bs; ++d)
+          Gp[i * npc * bs + kk * bs + d] = G[i][d];
+      for (int d = 0; d < bs; ++d)
+        col[kk * bs + d] = bs * compact.at(nodes[p * npc + kk]) + d;
     }
+    for (int r = 0; r < npc * bs; ++r)
+      for (int q = 0; q < npc * bs; ++q)
+      {
+        double v = 0.0;
+        for (int i = 0; i < 3; ++i)
+          v += Gp[i * npc * bs + r] * Gp[i * npc * bs + q];
+        if (v != 0.0)
+          trip.emplace_back(col[r], col[q], m_de[p] * v);
+      }
   }
-  Eigen::SparseMatrix<double> A(3 * np, 3 * np);
-  A.setFromTriplets(trip.begin(), trip.end());
-  _factor->ldlt.compute(A);
-  if (_factor->ldlt.info() != Eigen::Success)
+  Eigen::SparseMatrix<double> K(ns, ns);
+  K.setFromTriplets(trip.begin(), trip.end());
+  F.ldlt.compute(K);
+  if (F.ldlt.info() != Eigen::Success)
     throw std::runtime_error("multipliers: the constraint matrix is not symmetric positive definite");
+  F.full.assign(m_fe.size(), 0.0);
+  F.z.resize(ns);
   _lambda.assign(3 * np, 0.0);
   _rhs.assign(3 * np, 0.0);
   _tmp.assign(3 * np, 0.0);
@@ -118,16 +138,30 @@ double MultiplierSolver::correct(std::span<double> v_de, std::span<double> v_fe)
   _op.interpolate(v_fe, _tmp);
   for (std::size_t i = 0; i < 3 * np; ++i)
     _rhs[i] = v_de[i] - _tmp[i];
-  Eigen::Map<const Eigen::VectorXd> rhs(_rhs.data(), 3 * np);
-  Eigen::Map<Eigen::VectorXd> lambda(_lambda.data(), 3 * np);
-  lambda = _factor->ldlt.solve(rhs);
+  // y = D^-1 r, z = G^T y, s = K^-1 z, lambda = D^-1 (r - G s) / dt
+  auto& F = *_factor;
+  for (std::size_t p = 0; p < np; ++p)
+    for (int i = 0; i < 3; ++i)
+      _tmp[3 * p + i] = _m_de[p] * _rhs[3 * p + i];
+  std::fill(F.full.begin(), F.full.end(), 0.0);
+  _op.add_transpose(_tmp, F.full);
+  for (std::size_t i = 0; i < F.dofs.size(); ++i)
+    F.z[i] = F.full[F.dofs[i]];
+  const Eigen::VectorXd sol = F.ldlt.solve(F.z);
+  std::fill(F.full.begin(), F.full.end(), 0.0);
+  for (std::size_t i = 0; i < F.dofs.size(); ++i)
+    F.full[F.dofs[i]] = sol[i];
+  _op.interpolate(F.full, _tmp);
+  for (std::size_t p = 0; p < np; ++p)
+    for (int i = 0; i < 3; ++i)
+      _lambda[3 * p + i] = _m_de[p] * (_rhs[3 * p + i] - _tmp[3 * p + i]) / _dt;
   for (std::size_t p = 0; p < np; ++p)
     for (int i = 0; i < 3; ++i)
       v_de[3 * p + i] -= _dt / _m_de[p] * _lambda[3 * p + i];
-  std::vector<double> f(v_fe.size(), 0.0);
-  _op.add_transpose(_lambda, f);
-  for (std::size_t i = 0; i < v_fe.size(); ++i)
-    v_fe[i] += _dt / _m_fe[i] * f[i];
+  std::fill(F.full.begin(), F.full.end(), 0.0);
+  _op.add_transpose(_lambda, F.full);
+  for (auto i : F.dofs)
+    v_fe[i] += _dt / _m_fe[i] * F.full[i];
   const auto r = residual(v_de, v_fe);
   double worst = 0.0;
   for (double x : r)

@@ -363,6 +363,21 @@ void DemSolver::add_motion(ParticleMotion m)
   _motions.push_back(std::move(m));
 }
 
+void DemSolver::remove_motion(const std::string& name)
+{
+  const auto it = std::find_if(_motions.begin(), _motions.end(),
+                               [&](const ParticleMotion& m) { return m.name == name; });
+  if (it == _motions.end())
+    throw std::runtime_error("remove_motion: no condition named '" + name + "'");
+  _motions.erase(it);
+  std::fill(_held.begin(), _held.end(), 0);
+  for (const auto& m : _motions)
+    for (auto i : m.ids)
+      for (int k = 0; k < 6; ++k)
+        if (m.kind == MotionKind::fixed || (k < 3 && m.components[k]))
+          _held[6 * i + k] = 1;
+}
+
 void DemSolver::add_force(ParticleForce f)
 {
   if (f.ids.empty())

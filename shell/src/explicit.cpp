@@ -128,6 +128,27 @@ void ExplicitSolver::add_motion(PrescribedMotion m)
   _motions.push_back(std::move(m));
 }
 
+void ExplicitSolver::remove_motion(const std::string& name)
+{
+  const auto it = std::find_if(_motions.begin(), _motions.end(),
+                               [&](const PrescribedMotion& m) { return m.name == name; });
+  if (it == _motions.end())
+    throw std::runtime_error("remove_motion: no prescribed motion named '" + name + "'");
+  const std::vector<std::int32_t> freed = it->dofs;
+  _motions.erase(it);
+  for (auto d : freed)
+    _prescribed[d] = 0;
+  for (const auto& m : _motions)
+    for (auto d : m.dofs)
+      _prescribed[d] = 1;
+  for (auto d : freed)
+    if (!_prescribed[d])
+    {
+      _a[d] = (_fext[d] - _fint[d] - _c * _m[d] * _v[d]) / _m[d];
+      _r[d] = 0.0;
+    }
+}
+
 void ExplicitSolver::add_load(NodalLoad l)
 {
   if (l.dofs.empty())

@@ -109,6 +109,10 @@ public:
          const std::string& what);
 
   void add_motion(ParticleMotion m);
+  /// Releases the condition `name` (e.g. a loaded end let go): its spheres
+  /// move freely from the next step on, unless another condition holds them.
+  /// @throws std::runtime_error if no condition has that name.
+  void remove_motion(const std::string& name);
   void add_force(ParticleForce f);
   /// Computes the initial forces and energy (call after the conditions).
   void start();

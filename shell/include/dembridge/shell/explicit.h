@@ -106,6 +106,10 @@ public:
                  double damping = 0.0);
 
   void add_motion(PrescribedMotion m);
+  /// Releases the prescribed motion `name`: its dofs are free from now on
+  /// (unless another motion holds them), starting from their current state.
+  /// @throws std::runtime_error if no motion has that name.
+  void remove_motion(const std::string& name);
   void add_load(NodalLoad l);
 
   /// Sets u and v at the current time (default zero) and evaluates a(0).

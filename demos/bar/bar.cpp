@@ -1,0 +1,544 @@
+#include "bar.h"
+#include "support.h"
+
+#include "dembridge/bridge/coupled.h"
+#include "dembridge/dem/material_file.h"
+#include "dembridge/dem/output.h"
+#include "dembridge/dem/packing.h"
+#include "dembridge/shell/analytic.h"
+#include "dembridge/shell/mesh.h"
+#include "dembridge/shell/output.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <numeric>
+#include <sstream>
+
+namespace dembridge::demo
+{
+namespace
+{
+[[noreturn]] void bad(const std::string& what, double value, const std::string& allowed)
+{
+  std::ostringstream s;
+  s << what << " " << value << ": allowed is " << allowed;
+  throw std::runtime_error(s.str());
+}
+
+void check_config(const BarConfig& c)
+{
+  if (c.model != "fe" && c.model != "coupled" && c.model != "de")
+    throw std::runtime_error("model '" + c.model + "': allowed are fe, coupled, de");
+  if (c.load != "tension" && c.load != "bending")
+    throw std::runtime_error("load '" + c.load + "': allowed are tension, bending");
+  if (c.regime != "static" && c.regime != "dynamic")
+    throw std::runtime_error("regime '" + c.regime + "': allowed are static, dynamic");
+  if (!(c.length > 0.0))
+    bad("length [m]", c.length, "> 0");
+  if (!(c.width > 0.0 && c.width < c.length))
+    bad("width [m]", c.width, "in (0, length)");
+  if (!(c.fe_size > 0.0 && c.fe_size <= c.width))
+    bad("fe-size [m]", c.fe_size, "in (0, width]");
+  if (!(c.mean_radius > 0.0 && c.mean_radius < 0.1 * c.width))
+    bad("mean-radius [m]", c.mean_radius, "in (0, width / 10)");
+  if (c.overlap_layers < 1)
+    bad("overlap-layers", c.overlap_layers, ">= 1");
+  if (!(c.safety > 0.0 && c.safety <= 1.0))
+    bad("safety-factor", c.safety, "in (0, 1]");
+  if (c.damping >= 0.0 && !std::isfinite(c.damping))
+    bad("damping [1/s]", c.damping, "finite, >= 0 (or < 0 for the default)");
+  for (double p : {c.probe_de, c.probe_overlap, c.probe_overlap_fe})
+    if (!(p > 0.0 && p < c.length))
+      bad("probe position [m]", p, "in (0, length)");
+  if (c.frames < 1)
+    bad("frames", c.frames, ">= 1");
+}
+
+struct Probe
+{
+  std::string key;
+  double x = 0.0;
+  std::vector<double> values;
+};
+
+/// FE displacement along the bar: the mean of a dof component over each
+/// column of nodes (same x), linearly interpolated between columns.
+class FeColumns
+{
+public:
+  FeColumns(std::span<const double> x, int bs, int comp) : _bs(bs), _comp(comp)
+  {
+    std::map<long, std::vector<std::int32_t>> cols;
+    for (std::size_t k = 0; k < x.size() / 3; ++k)
+      cols[std::lround(x[3 * k] * 1e9)].push_back(static_cast<std::int32_t>(k));
+    for (auto& [key, nodes] : cols)
+    {
+      _x.push_back(key * 1e-9);
+      _nodes.push_back(nodes);
+    }
+  }
+  double at(std::span<const double> u, double xp) const
+  {
+    auto mean = [&](std::size_t c) {
+      double s = 0.0;
+      for (auto k : _nodes[c])
+        s += u[_bs * k + _comp];
+      return s / _nodes[c].size();
+    };
+    std::size_t c = 0;
+    while (c + 2 < _x.size() && _x[c + 1] < xp)
+      ++c;
+    const double t = std::clamp((xp - _x[c]) / (_x[c + 1] - _x[c]), 0.0, 1.0);
+    return (1.0 - t) * mean(c) + t * mean(c + 1);
+  }
+  const std::vector<double>& x() const { return _x; }
+  double xmax() const { return _x.back(); }
+
+private:
+  int _bs, _comp;
+  std::vector<double> _x;
+  std::vector<std::vector<std::int32_t>> _nodes;
+};
+
+/// Mean displacement component of a set of particles.
+double mean_displacement(const dem::Particles& p, std::span<const std::int32_t> ids, int comp)
+{
+  double s = 0.0;
+  for (auto i : ids)
+    s += p.x[3 * i + comp] - p.x0[3 * i + comp];
+  return s / ids.size();
+}
+
+std::vector<std::int32_t> particles_near(const dem::Particles& p, double xp, double half)
+{
+  std::vector<std::int32_t> ids;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (std::abs(p.x0[3 * i] - xp) < half)
+      ids.push_back(static_cast<std::int32_t>(i));
+  if (ids.empty())
+    throw std::runtime_error("no sphere within " + std::to_string(half) + " m of the probe x = "
+                             + std::to_string(xp) + " m");
+  return ids;
+}
+
+double smooth_ramp(double t, double T) { return t >= T ? 1.0 : 0.5 * (1.0 - std::cos(std::numbers::pi * t / T)); }
+} // namespace
+
+double measured_modulus(const nlohmann::json& run)
+{
+  if (!run.contains("measured_youngs_modulus_pa"))
+    throw std::runtime_error("measured_modulus: not a static tension run with spheres");
+  return run.at("measured_youngs_modulus_pa").get<double>();
+}
+
+double bar_first_frequency(const BarConfig& c, double E, double nu, double rho)
+{
+  if (c.load == "tension")
+    return shell::analytic::axial_clamped_free_frequency(E, rho, c.length);
+  return shell::analytic::timoshenko_cantilever_frequency(E, nu, rho, {c.width, c.width}, c.length,
+                                                          5.0 / 6.0);
+}
+
+nlohmann::json run_bar(const BarConfig& c)
+{
+  check_config(c);
+  Stopwatch clock;
+  const bool tension = c.load == "tension", dynamic = c.regime == "dynamic";
+  const bool use_fe = c.model != "de", use_de = c.model != "fe";
+  const int comp = tension ? 0 : 2;
+  const double L = c.length, w = c.width, h = c.width;
+
+  // the same concrete on both sides
+  auto mf = dem::read_material(c.material);
+  dem::Material mat = mf.material;
+  mat.tensile = mat.cohesion = 1e12; // linear elastic validation
+  shell::Material sm;
+  sm.youngs_modulus = c.fe_youngs_modulus > 0.0 ? c.fe_youngs_modulus
+                                                : mf.macroscopic.value("youngs_modulus_pa", mat.youngs_modulus);
+  sm.poisson_ratio = mf.macroscopic.value("poisson_ratio", mat.poisson_ratio);
+  sm.density = mat.density;
+  sm.thickness = h;
+  const double E = sm.youngs_modulus, nu = sm.poisson_ratio, rho = sm.density;
+  const shell::analytic::BeamSection sec{w, h};
+  const double f1 = bar_first_frequency(c, E, nu, rho), T1 = 1.0 / f1;
+  const double force = c.static_force != 0.0 ? c.static_force : (tension ? 1e5 : 2e4);
+  const double d0 = c.end_displacement != 0.0 ? c.end_displacement : (tension ? 5e-5 : 2e-4);
+  const double ramp = c.ramp_time > 0.0 ? c.ramp_time : T1;
+  const double end_time = c.end_time > 0.0 ? c.end_time : (dynamic ? ramp + 4.0 * T1 : 3.0 * T1);
+  const double damping = dynamic ? 0.0 : (c.damping >= 0.0 ? c.damping : 4.0 * std::numbers::pi * f1);
+  if (dynamic && end_time < ramp + 1.5 * T1)
+    bad("end-time [s]", end_time, "at least ramp-time + 1.5 first periods (" + std::to_string(ramp + 1.5 * T1) + " s) to measure a frequency");
+
+  // geometry of the regions
+  const double rmax = 2.0 * c.mean_radius * c.radius_ratio / (1.0 + c.radius_ratio);
+  double fe_end = L, de_start = 0.0;
+  if (c.model == "coupled")
+  {
+    const double k = c.overlap_start / c.fe_size;
+    if (std::abs(k - std::round(k)) > 1e-6)
+      bad("overlap-start [m]", c.overlap_start,
+          "a multiple of fe-size (" + std::to_string(c.fe_size) + " m), so the overlap is whole FE layers");
+    de_start = c.overlap_start;
+    fe_end = de_start + c.overlap_layers * c.fe_size;
+    if (!(de_start > 0.0 && fe_end < L - 2.0 * rmax))
+      bad("overlap end [m]", fe_end, "overlap inside (0, length - 2 Rmax): check overlap-start and overlap-layers");
+  }
+  if (use_fe)
+  {
+    const double k = fe_end / c.fe_size, kw = w / c.fe_size;
+    if (std::abs(k - std::round(k)) > 1e-6 || std::abs(kw - std::round(kw)) > 1e-6)
+      bad("fe-size [m]", c.fe_size, "a divisor of the FE region's length and of the width");
+  }
+
+  // FE side
+  std::unique_ptr<shell::FEModel> fe;
+  std::unique_ptr<shell::ExplicitSolver> fe_alone;
+  std::unique_ptr<FeColumns> cols;
+  if (use_fe)
+  {
+    auto mesh = shell::create_shell_rectangle(MPI_COMM_WORLD, fe_end, w,
+                                              static_cast<int>(std::round(fe_end / c.fe_size)),
+                                              static_cast<int>(std::round(w / c.fe_size)),
+                                              shell::parse_cell(c.cell));
+    fe = std::make_unique<shell::FEModel>(mesh, sm);
+    cols = std::make_unique<FeColumns>(fe->node_coordinates(), fe->block_size(), comp);
+  }
+  // DE side
+  dem::Particles p;
+  dem::Links links;
+  if (use_de)
+  {
+    dem::PackingOptions po;
+    po.mean_radius = c.mean_radius;
+    po.radius_ratio = c.radius_ratio;
+    po.seed = c.seed;
+    const auto region = dem::box_region({de_start, 0.0, -0.5 * h}, {L, w, 0.5 * h});
+    const auto pk = dem::generate_packing(region, po);
+    double solid = 0.0;
+    for (double r : pk.r)
+      solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    p = dem::make_particles(pk.x, pk.r, mat.density, solid / region.volume);
+    links = dem::create_links(p, dem::lambda_for_mean_links(p.x, p.r, mf.links_per_sphere), mat);
+  }
+
+  // solvers
+  std::unique_ptr<bridge::CoupledSolver> coupled;
+  std::unique_ptr<dem::DemSolver> de_alone;
+  shell::ExplicitSolver* fes = nullptr;
+  dem::DemSolver* des = nullptr;
+  double dt = 0.0;
+  nlohmann::json steps_info;
+  if (c.model == "coupled")
+  {
+    bridge::CouplingOptions o;
+    o.overlap = {{1.0, 0.0, 0.0}, fe_end, de_start};
+    o.safety = c.safety;
+    o.damping_fe = o.damping_de = damping;
+    coupled = std::make_unique<bridge::CoupledSolver>(*fe, p, links, mat, o);
+    fes = &coupled->fe();
+    des = &coupled->de();
+    dt = coupled->dt();
+    steps_info = {{"dt_coupled_s", coupled->dt_coupled()}, {"dt_fe_alone_s", coupled->dt_fe()},
+                  {"dt_de_alone_s", coupled->dt_de()}, {"constrained_particles", coupled->constrained()},
+                  {"placed_by_nearest_rule", coupled->coupling().outside()}};
+  }
+  else if (c.model == "fe")
+  {
+    const auto m = fe->lumped_mass();
+    const double dtc = fe->critical_time_step(m);
+    dt = c.safety * dtc;
+    fe_alone = std::make_unique<shell::ExplicitSolver>(m, fe->internal_force_fn(), dt, damping);
+    fes = fe_alone.get();
+    steps_info = {{"dt_critical_s", dtc}};
+  }
+  else
+  {
+    const double dtc = bridge::particle_critical_time_step(p, links);
+    dt = c.safety * dtc;
+    de_alone = std::make_unique<dem::DemSolver>(p, links, mat, dt, damping, 0.5 * c.mean_radius);
+    des = de_alone.get();
+    steps_info = {{"dt_critical_s", dtc}};
+  }
+
+  // supports and loads
+  const int bs = use_fe ? fe->block_size() : 0;
+  std::vector<std::int32_t> end_nodes, end_ids;
+  std::vector<int> all(6);
+  std::iota(all.begin(), all.end(), 0);
+  if (use_fe)
+  {
+    const auto x = fe->node_coordinates();
+    fes->add_motion({"support", shell::node_dofs(shell::select_nodes(x, [&](const auto& q) { return q[0] < 1e-9; }, "end x = 0"), bs, all),
+                     shell::MotionKind::fixed, {}});
+    if (c.model == "fe")
+      end_nodes = shell::select_nodes(x, [&](const auto& q) { return q[0] > L - 1e-9; }, "loaded end");
+  }
+  if (use_de)
+  {
+    if (c.model == "de")
+      des->add_motion({"support", dem::DemSolver::select(p, [&](const auto& q) { return q[0] < rmax; }, "end x = 0"),
+                       dem::MotionKind::fixed, {true, true, true}, {}});
+    end_ids = dem::DemSolver::select(p, [&](const auto& q) { return q[0] > L - rmax; }, "loaded end");
+  }
+  const std::array<bool, 3> comps{tension, false, !tension};
+  const std::array<double, 3> dir{tension ? 1.0 : 0.0, 0.0, tension ? 0.0 : 1.0};
+  auto d_of_t = [=](double t) { return d0 * smooth_ramp(t, ramp); };
+  if (!end_nodes.empty())
+  {
+    const std::vector<int> one{comp};
+    const auto dofs = shell::node_dofs(end_nodes, bs, one);
+    if (dynamic)
+      fes->add_motion({"end", dofs, shell::MotionKind::displacement, d_of_t});
+    else
+      fes->add_load({"end", dofs, fe->boundary_load_weights(end_nodes), [=](double) { return force; }});
+  }
+  if (!end_ids.empty())
+  {
+    if (dynamic)
+      des->add_motion({"end", end_ids, dem::MotionKind::displacement, comps, d_of_t});
+    else
+    {
+      const double share = force / end_ids.size();
+      des->add_force({"end", end_ids, dir, [=](double) { return share; }});
+    }
+  }
+  if (coupled)
+    coupled->start(std::vector<double>(fe->num_dofs(), 0.0), std::vector<double>(fe->num_dofs(), 0.0));
+  else if (fes)
+    fes->set_state(std::vector<double>(fe->num_dofs(), 0.0), std::vector<double>(fe->num_dofs(), 0.0));
+  else
+    des->start();
+
+  // probes: in the DE where there are spheres, else on the shell
+  std::vector<Probe> probes{{"probe_0_75", c.probe_de, {}},
+                            {"probe_0_4351", c.model == "fe" ? c.probe_overlap_fe : c.probe_overlap, {}}};
+  std::vector<std::vector<std::int32_t>> probe_ids(probes.size());
+  for (std::size_t k = 0; k < probes.size(); ++k)
+    if (use_de && probes[k].x > de_start)
+      probe_ids[k] = particles_near(p, probes[k].x, c.mean_radius);
+    else if (!use_fe || probes[k].x > fe_end)
+      throw std::runtime_error("probe x = " + std::to_string(probes[k].x) + " m lies in no model region");
+  auto probe_value = [&](std::size_t k) {
+    return probe_ids[k].empty() ? cols->at(fes->u(), probes[k].x) : mean_displacement(p, probe_ids[k], comp);
+  };
+  auto end_value = [&] { return end_ids.empty() ? cols->at(fes->u(), L) : mean_displacement(p, end_ids, comp); };
+
+  // output
+  std::unique_ptr<shell::XdmfWriter> shell_out;
+  std::unique_ptr<dem::ParticleWriter> part_out;
+  std::ofstream csv;
+  const std::filesystem::path dir_out(c.output);
+  if (!c.output.empty())
+  {
+    std::filesystem::create_directories(dir_out);
+    if (use_fe)
+      shell_out = std::make_unique<shell::XdmfWriter>(*fe, dir_out / "shell.xdmf");
+    if (use_de)
+      part_out = std::make_unique<dem::ParticleWriter>(dir_out / "particles.xdmf", links, p.size(), false);
+    csv.open(dir_out / "history.csv");
+    csv << "t_s,probe_0_75_m,probe_0_4351_m,end_m\n";
+  }
+  auto write_frame = [&](double t) {
+    if (shell_out)
+      shell_out->write(t, fes->u(), fes->v());
+    if (part_out)
+      part_out->write(t, p, links);
+  };
+
+  const auto nsteps = static_cast<std::int64_t>(std::ceil(end_time / dt));
+  if (!c.quiet)
+    std::printf("# bar: %s model, %s, %s: %zu spheres, %zu shell nodes, dt %.4g s, %lld steps to %.4g s "
+                "(beam theory: first frequency %.5g Hz)\n",
+                c.model.c_str(), c.load.c_str(), c.regime.c_str(), p.size(), use_fe ? fe->num_nodes() : 0,
+                dt, static_cast<long long>(nsteps), end_time, f1);
+  std::vector<double> ts;
+  std::vector<std::vector<double>> after(probes.size());
+  std::vector<double> t_after;
+  bool released = !dynamic;
+  const std::int64_t every = std::max<std::int64_t>(1, nsteps / c.frames);
+  write_frame(0.0);
+  double t = 0.0;
+  for (std::int64_t k = 1; k <= nsteps; ++k)
+  {
+    if (coupled)
+      coupled->step();
+    else if (fes)
+      fes->step();
+    else
+      des->step();
+    t = k * dt;
+    if (!released && t >= ramp)
+    {
+      // the ramp reached d0: let the end go
+      if (fes && !end_nodes.empty())
+        fes->remove_motion("end");
+      if (des && !end_ids.empty())
+        des->remove_motion("end");
+      released = true;
+    }
+    const double v0 = probe_value(0), v1 = probe_value(1);
+    if (dynamic && released)
+    {
+      t_after.push_back(t);
+      after[0].push_back(v0);
+      after[1].push_back(v1);
+    }
+    if (csv.is_open() && (k % std::max<std::int64_t>(1, nsteps / 2000) == 0 || k == nsteps))
+      csv << t << ',' << v0 << ',' << v1 << ',' << end_value() << '\n';
+    if (k % every == 0 || k == nsteps)
+      write_frame(t);
+    if (!c.quiet && (k % std::max<std::int64_t>(1, nsteps / 10) == 0 || k == nsteps))
+      std::printf("  t %.4e s  step %lld/%lld  probe 0.75: %.4e m  probe %.4g: %.4e m  end %.4e m  (%.1f s)\n", t,
+                  static_cast<long long>(k), static_cast<long long>(nsteps), v0, probes[1].x, v1,
+                  end_value(), clock.seconds());
+  }
+
+  nlohmann::json out = {{"model", c.model},
+                        {"load", c.load},
+                        {"regime", c.regime},
+                        {"particles", p.size()},
+                        {"links", links.size()},
+                        {"shell_nodes", use_fe ? fe->num_nodes() : 0},
+                        {"youngs_modulus_pa", E},
+                        {"poisson_ratio", nu},
+                        {"density_kg_m3", rho},
+                        {"beam_theory_frequency_hz", f1},
+                        {"dt_s", dt},
+                        {"steps", nsteps},
+                        {"end_time_s", end_time},
+                        {"time_step", steps_info}};
+  for (std::size_t k = 0; k < probes.size(); ++k)
+  {
+    nlohmann::json pj = {{"x_m", probes[k].x}, {"final_displacement_m", probe_value(k)}};
+    if (dynamic)
+    {
+      pj["first_frequency_hz"] = crossing_frequency(t_after, after[k]);
+      pj["amplitude_m"] = amplitude(after[k]);
+    }
+    out[probes[k].key] = pj;
+  }
+  if (dynamic)
+  {
+    out["end_displacement_m"] = d0;
+    out["ramp_time_s"] = ramp;
+  }
+  else
+  {
+    // beam theory along the bar
+    const double G = E / (2.0 * (1.0 + nu)), A = sec.area(), I = sec.second_moment(), k = 5.0 / 6.0;
+    auto theory = [&](double x) {
+      return tension ? force * x / (E * A)
+                     : force / (E * I) * (L * x * x / 2.0 - x * x * x / 6.0) + force * x / (k * G * A);
+    };
+    const double uend = end_value(), uref = theory(L);
+    out["static_force_n"] = force;
+    out["static_end_displacement_m"] = uend;
+    out["reference_end_displacement_m"] = uref;
+    out["static_relative_error"] = uend / uref - 1.0;
+    out["damping_per_s"] = damping;
+    // shape: FE columns, and 2-radius slabs of spheres
+    std::vector<std::array<double, 3>> rows; // x, u, source (0 FE, 1 DE)
+    if (use_fe)
+      for (double x : cols->x())
+        rows.push_back({x, cols->at(fes->u(), x), 0.0});
+    if (use_de)
+      for (double x = de_start + c.mean_radius; x < L; x += 2.0 * c.mean_radius)
+      {
+        const auto ids = particles_near(p, x, c.mean_radius);
+        rows.push_back({x, mean_displacement(p, ids, comp), 1.0});
+      }
+    double worst = 0.0;
+    for (const auto& r : rows)
+      worst = std::max(worst, std::abs(r[1] - theory(r[0])) / std::abs(uref));
+    out["shape_max_deviation_rel"] = worst;
+    if (tension && use_de)
+    {
+      // strain on the middle half of the DE region, by least squares
+      double sx = 0, su = 0, sxx = 0, sxu = 0, n = 0;
+      for (const auto& r : rows)
+        if (r[2] == 1.0 && r[0] > de_start + 0.25 * (L - de_start) && r[0] < de_start + 0.75 * (L - de_start))
+        {
+          sx += r[0], su += r[1], sxx += r[0] * r[0], sxu += r[0] * r[1], n += 1;
+        }
+      const double slope = (n * sxu - sx * su) / (n * sxx - sx * sx);
+      out["measured_youngs_modulus_pa"] = force / (sec.area() * slope);
+    }
+    if (!c.output.empty())
+    {
+      std::ofstream s(dir_out / "shape.csv");
+      s << "x_m,displacement_m,beam_theory_m,source\n";
+      for (const auto& r : rows)
+        s << r[0] << ',' << r[1] << ',' << theory(r[0]) << ',' << (r[2] == 0.0 ? "fe" : "de") << '\n';
+    }
+  }
+  out["wall_s"] = clock.seconds();
+  return out;
+}
+
+nlohmann::json compare_table(const nlohmann::json& runs, std::string& md)
+{
+  nlohmann::json table;
+  std::ostringstream m;
+  auto rel = [](double a, double b) { return a / b - 1.0; };
+  m << "| load | quantity | probe | coupled vs DE | coupled vs FE | between FE and DE |\n"
+    << "|---|---|---|---|---|---|\n";
+  char buf[256];
+  for (const std::string load : {"tension", "bending"})
+  {
+    const auto& fe = runs.at("fe_" + load + "_dynamic");
+    const auto& cp = runs.at("coupled_" + load + "_dynamic");
+    const auto& de = runs.at("de_" + load + "_dynamic");
+    for (const std::string probe : {"probe_0_75", "probe_0_4351"})
+      for (const std::string q : {"first_frequency_hz", "amplitude_m"})
+      {
+        const double vf = fe.at(probe).at(q), vc = cp.at(probe).at(q), vd = de.at(probe).at(q);
+        const bool between = (vc - vf) * (vc - vd) <= 0.0;
+        table[load][probe][q] = {{"coupled_vs_de", rel(vc, vd)}, {"coupled_vs_fe", rel(vc, vf)},
+                                 {"fe", vf}, {"coupled", vc}, {"de", vd}, {"between", between}};
+        std::snprintf(buf, sizeof buf, "| %s | %s | %s | %+.2f %% | %+.2f %% | %s |\n", load.c_str(),
+                      q == "amplitude_m" ? "amplitude" : "first frequency", probe.c_str(),
+                      100.0 * rel(vc, vd), 100.0 * rel(vc, vf), between ? "yes" : "no");
+        m << buf;
+      }
+  }
+  m << "\n| load | model | static end displacement [m] | beam theory [m] | error |\n|---|---|---|---|---|\n";
+  for (const std::string load : {"tension", "bending"})
+    for (const std::string model : {"fe", "coupled", "de"})
+    {
+      const auto& r = runs.at(model + "_" + load + "_static");
+      const double u = r.at("static_end_displacement_m"), ref = r.at("reference_end_displacement_m");
+      table["static"][load][model] = {{"end_displacement_m", u}, {"reference_m", ref}, {"relative_error", rel(u, ref)}};
+      std::snprintf(buf, sizeof buf, "| %s | %s | %.5e | %.5e | %+.2f %% |\n", load.c_str(), model.c_str(), u, ref,
+                    100.0 * rel(u, ref));
+      m << buf;
+    }
+  m << "\n| model | load | regime | particles | shell nodes | steps | wall [s] |\n|---|---|---|---|---|---|---|\n";
+  for (const auto& [key, r] : runs.items())
+  {
+    std::snprintf(buf, sizeof buf, "| %s | %s | %s | %d | %d | %lld | %.1f |\n",
+                  r.at("model").get<std::string>().c_str(), r.at("load").get<std::string>().c_str(),
+                  r.at("regime").get<std::string>().c_str(), r.at("particles").get<int>(),
+                  r.at("shell_nodes").get<int>(), r.at("steps").get<long long>(), r.at("wall_s").get<double>());
+    m << buf;
+    table["wall_s"][key] = r.at("wall_s");
+  }
+  for (const std::string load : {"tension", "bending"})
+  {
+    const double s = runs.at("de_" + load + "_dynamic").at("wall_s").get<double>()
+                     / runs.at("coupled_" + load + "_dynamic").at("wall_s").get<double>();
+    table["speedup_coupled_over_de"][load] = s;
+    std::snprintf(buf, sizeof buf, "\nDynamic %s: the coupled model runs %.2f x faster than the DE model.\n",
+                  load.c_str(), s);
+    m << buf;
+  }
+  md = m.str();
+  return table;
+}
+
+} // namespace dembridge::demo
