@@ -46,10 +46,16 @@ TEST_CASE("bar, reduced: static shapes against beam theory, dynamic frequencies 
                  << " m, beam theory " << r.at("reference_end_displacement_m") << " m");
       // FE: the issue's 2 % (measured -0.2 % tension, -0.6 % bending: the
       // clamp holds the Poisson contraction). DE alone in tension: E was
-      // measured on its middle half, so only the ends differ (+0.3 %).
-      // With 6 spheres across, bending of the DE and coupled bars differs by
-      // a few % (measured DE +2.4 %, coupled -5.7 %): 8 %.
-      const double tol = model == "fe" || (model == "de" && load == "tension") ? 0.02 : 0.08;
+      // measured on its middle half, so only the ends differ: 2 %. The DE
+      // bar in bending, and the coupled bar in tension: with 6 spheres
+      // across, the outer layer of spheres (looser than the bulk) is a fifth
+      // of the half-depth and bending weights it by z^2, so a few % from
+      // beam theory are expected: 5 % (measured DE bending +2.4 %, coupled
+      // tension +1.2 %). The coupled bar in bending: the open defect, in
+      // the test case below.
+      if (model == "coupled" && load == "bending")
+        continue;
+      const double tol = model == "fe" || (model == "de" && load == "tension") ? 0.02 : 0.05;
       CHECK(std::abs(err) < tol);
     }
     double f[3];
@@ -69,4 +75,24 @@ TEST_CASE("bar, reduced: static shapes against beam theory, dynamic frequencies 
     CHECK(std::abs(f[1] / f[2] - 1.0) < 0.04);
     CHECK(std::abs(f[1] / f[0] - 1.0) < 0.04);
   }
+}
+
+TEST_CASE("bar, reduced: coupled static bending lies between the FE and DE bars", "[bar][!mayfail]")
+{
+  // The paper: the coupled model lies between the FE and DE ones. Known to
+  // fail (open in the validation issue): measured coupled -5.7 % against
+  // beam theory where FE gives -0.6 % and DE +2.4 % (full size: -3.6 %,
+  // -0.6 %, +2.7 %). [!mayfail]: reported by every run, not blocking CI.
+  auto t = reduced("de", "tension", "static");
+  const double E = demo::measured_modulus(demo::run_bar(t));
+  double err[3];
+  int k = 0;
+  for (const std::string model : {"fe", "coupled", "de"})
+  {
+    auto c = reduced(model, "bending", "static");
+    c.fe_youngs_modulus = E;
+    err[k++] = demo::run_bar(c).at("static_relative_error").get<double>();
+  }
+  INFO("static bending vs beam theory: FE " << err[0] << ", coupled " << err[1] << ", DE " << err[2]);
+  CHECK((err[1] - err[0]) * (err[1] - err[2]) <= 0.0);
 }

@@ -186,10 +186,9 @@ double CoupledSolver::step()
   _de_solver->end_step();
   // RATTLE: the full-step velocities projected too. The positions do not
   // change (the projection is linear and the next half-step velocities are
-  // projected anyway) but v(n+1), hence the kinetic energy, is that of a
-  // motion that satisfies the constraint: without it, the unconstrained
-  // part dt/2 a of the lightest (floored) masses shows as a spurious O(dt^2)
-  // energy error.
+  // projected anyway), but v(n+1) -- written out, and in the kinetic
+  // energy -- then satisfies the constraint instead of carrying the
+  // unconstrained dt/2 a of the lightest (floored) masses.
   correct(false);
   return _residual;
 }
