@@ -7,4 +7,5 @@ sh scripts/install-deps.sh
 [ -f build/CMakeCache.txt ] || cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j"$(nproc)"
 cd build
-ctest --output-on-failure -j"$(nproc)"
+# one OpenMP thread per test: CTest already runs one test per core
+OMP_NUM_THREADS=1 ctest --output-on-failure -j"$(nproc)"

@@ -4,6 +4,7 @@
 #include "dembridge/dem/solver.h"
 
 #include <catch2/catch.hpp>
+#include <omp.h>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -87,7 +88,7 @@ TEST_CASE("Newton's third law: internal forces and moments sum to zero", "[dem]"
   for (auto& v : p.w)
     v = w(gen);
   NeighbourList nl(0.2e-3);
-  nl.update(p.x, p.r, l.a, l.b);
+  nl.update(p.x, p.r, l);
   ForceCounters c;
   compute_forces(p, l, nl, concrete(), 1e-7, c);
   double fmax = 0.0;
@@ -146,7 +147,7 @@ TEST_CASE("objectivity: rigid translation and 90 degree rotation create no force
       p.w[3 * i] = p.w[3 * i + 1] = 0.0;
       p.w[3 * i + 2] = Om;
     }
-    nl.update(p.x, p.r, l.a, l.b);
+    nl.update(p.x, p.r, l);
     compute_forces(p, l, nl, m, dt, c);
     for (double f : p.f)
       worst = std::max(worst, std::abs(f));
@@ -167,7 +168,7 @@ TEST_CASE("objectivity: a stored shear force turns with the pair", "[dem]")
   auto l = create_links(p, 1.01, m);
   REQUIRE(l.size() == 1);
   NeighbourList nl(0.2e-3);
-  nl.update(p.x, p.r, l.a, l.b);
+  nl.update(p.x, p.r, l);
   ForceCounters c;
   p.v[5] = 1.0; // b moves along z over one step: shear
   p.x[5] += 1e-7 * p.v[5];
@@ -192,7 +193,7 @@ TEST_CASE("objectivity: a stored shear force turns with the pair", "[dem]")
       p.v[3 * i + 2] = 0.0;
       p.w[3 * i + 2] = Om;
     }
-    nl.update(p.x, p.r, l.a, l.b);
+    nl.update(p.x, p.r, l);
     compute_forces(p, l, nl, m, dt, c);
   }
   // fs0 was along z (the motion of b): a rotation about z keeps it along z
@@ -207,7 +208,7 @@ TEST_CASE("a link broken in shear becomes a frictional contact", "[dem]")
   const Material m = concrete();
   auto l = create_links(p, 1.01, m);
   NeighbourList nl(0.2e-3);
-  nl.update(p.x, p.r, l.a, l.b);
+  nl.update(p.x, p.r, l);
   ForceCounters c;
   const auto law = m.law(1e-3, 1e-3, 2e-3);
   // one large shear increment beyond S C0 breaks it
@@ -323,7 +324,7 @@ TEST_CASE("linearised stiffness action matches the force loop for small incremen
     p.w[i] = u[3 * n + i] / dt; // compute_forces turns each sphere by w dt
   }
   NeighbourList nl(0.2e-3);
-  nl.update(p.x, p.r, l.a, l.b);
+  nl.update(p.x, p.r, l);
   ForceCounters c;
   compute_forces(p, l, nl, m, dt, c);
   double fmax = 0.0, tmax = 0.0, ef = 0.0, et = 0.0;
@@ -457,14 +458,14 @@ TEST_CASE("boundary conditions: prescribed displacement and external force on a 
 TEST_CASE("neighbour list: rebuilt only after a move of half the skin", "[dem]")
 {
   auto p = lattice(4);
-  std::vector<std::int32_t> none;
+  const Links none; // no links: every near pair is listed
   NeighbourList nl(0.2e-3);
-  CHECK(nl.update(p.x, p.r, none, none));
+  CHECK(nl.update(p.x, p.r, none));
   const auto pairs = nl.size();
   p.x[0] += 0.09e-3; // below skin / 2
-  CHECK(!nl.update(p.x, p.r, none, none));
+  CHECK(!nl.update(p.x, p.r, none));
   p.x[0] += 0.02e-3; // now 0.11e-3 > skin / 2
-  CHECK(nl.update(p.x, p.r, none, none));
+  CHECK(nl.update(p.x, p.r, none));
   CHECK(nl.builds() == 2);
   CHECK(nl.size() >= pairs - 10);
   // every pair closer than R_a + R_b + skin is listed
@@ -475,4 +476,61 @@ TEST_CASE("neighbour list: rebuilt only after a move of half the skin", "[dem]")
                           p.x[3 * j + 2] - p.x[3 * i + 2])
                < p.r[i] + p.r[j] + 0.2e-3;
   CHECK(nl.size() == brute);
+}
+
+TEST_CASE("threads: the same run bit for bit on 1, 2 and 3 threads, links breaking into "
+          "contacts", "[dem]")
+{
+  // A jittered lattice pulled apart at the top and pushed sideways, with weak
+  // links: links break in tension and in shear and contacts form, so every
+  // path of the force loop runs, including items whose spheres belong to
+  // different threads.
+  struct Result
+  {
+    std::vector<double> x, v, w;
+    std::size_t broken;
+    double breakage, friction, damping;
+  };
+  auto run = [](int threads)
+  {
+    const int saved = omp_get_max_threads();
+    const std::size_t saved_min = min_spheres_per_thread_team();
+    omp_set_num_threads(threads);
+    set_min_spheres_per_thread_team(1); // threads even for this small assembly
+    auto p = lattice(7, 11);
+    Material m = concrete();
+    m.tensile = 0.5e6;
+    m.cohesion = 0.7e6;
+    auto l = create_links(p, 1.4, m);
+    const double dt = 0.5 * critical_time_step(p, l);
+    DemSolver s(p, l, m, dt, 50.0, 0.2e-3);
+    auto bottom = DemSolver::select(p, [](const auto& x) { return x[2] < 1e-3; }, "bottom");
+    auto top = DemSolver::select(p, [](const auto& x) { return x[2] > 11e-3; }, "top");
+    s.add_motion({"bottom", bottom, MotionKind::fixed, {true, true, true}, {}});
+    s.add_motion({"top", top, MotionKind::velocity, {true, false, true},
+                  [](double) { return 2.0; }});
+    s.start();
+    for (int k = 0; k < 400; ++k)
+      s.step();
+    omp_set_num_threads(saved);
+    set_min_spheres_per_thread_team(saved_min);
+    const DemEnergy e = s.energy();
+    return Result{p.x, p.v, p.w, l.size() - l.count(LinkState::intact), e.breakage, e.friction,
+                  e.damping};
+  };
+  const Result one = run(1);
+  REQUIRE(one.broken > 0);     // the test exercises breakage...
+  REQUIRE(one.friction > 0.0); // ...and sliding contacts
+  for (int threads : {2, 3})
+  {
+    const Result r = run(threads);
+    INFO(threads << " threads");
+    CHECK(r.x == one.x); // exact comparison on purpose: bitwise reproducible
+    CHECK(r.v == one.v);
+    CHECK(r.w == one.w);
+    CHECK(r.broken == one.broken);
+    CHECK(r.breakage == one.breakage);
+    CHECK(r.friction == one.friction);
+    CHECK(r.damping == one.damping);
+  }
 }

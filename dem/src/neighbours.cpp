@@ -1,6 +1,9 @@
 #include "dembridge/dem/neighbours.h"
 
 #include <algorithm>
+#include <omp.h>
+
+#include "threads.h"
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -72,13 +75,13 @@ NeighbourList::NeighbourList(double skin) : _skin(skin)
 }
 
 bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
-                           std::span<const std::int32_t> link_a,
-                           std::span<const std::int32_t> link_b)
+                           const Links& links)
 {
   const std::size_t np = r.size();
   if (_builds > 0 && _x_build.size() == x.size())
   {
     double max2 = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : max2) num_threads(impl::threads_for(np))
     for (std::size_t i = 0; i < np; ++i)
     {
       const double dx = x[3 * i] - _x_build[3 * i], dy = x[3 * i + 1] - _x_build[3 * i + 1],
@@ -90,30 +93,73 @@ bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
   }
   const double rmax = np ? *std::max_element(r.begin(), r.end()) : 0.0;
   CellGrid grid(x, 2.0 * rmax + _skin);
-  std::vector<std::int32_t> na, nb;
-  std::vector<std::int32_t> found;
-  for (std::size_t i = 0; i < np; ++i)
+  // links sorted by (a, b): those of sphere i as a are a contiguous range
+  std::vector<std::int32_t> first(np + 1, 0);
+  for (std::size_t k = 0; k < links.size(); ++k)
   {
-    found.clear();
-    grid.for_each_later_near(x, i,
-                             [&](std::int32_t j, double d2)
-                             {
-                               const double lim = r[i] + r[j] + _skin;
-                               if (d2 < lim * lim)
-                                 found.push_back(j);
-                             });
-    std::sort(found.begin(), found.end());
-    for (auto j : found)
+    if (k > 0 && (links.a[k] < links.a[k - 1]
+                  || (links.a[k] == links.a[k - 1] && links.b[k] <= links.b[k - 1])))
+      throw std::runtime_error("neighbour list: links must be sorted by (a, b) without repeats");
+    ++first[links.a[k] + 1];
+  }
+  for (std::size_t i = 0; i < np; ++i)
+    first[i + 1] += first[i];
+  // each thread searches a contiguous block of spheres (static schedule), so
+  // the blocks joined in thread order give the same list for any thread count
+  struct Found
+  {
+    std::vector<std::int32_t> a, b, link;
+  };
+  std::vector<Found> chunk;
+#pragma omp parallel num_threads(impl::threads_for(np))
+  {
+#pragma omp single
+    chunk.resize(omp_get_num_threads());
+    Found& out = chunk[omp_get_thread_num()];
+    std::vector<std::int32_t> near;
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < np; ++i)
     {
-      na.push_back(static_cast<std::int32_t>(i));
-      nb.push_back(j);
+      near.clear();
+      grid.for_each_later_near(x, i,
+                               [&](std::int32_t j, double d2)
+                               {
+                                 const double lim = r[i] + r[j] + _skin;
+                                 if (d2 < lim * lim)
+                                   near.push_back(j);
+                               });
+      std::sort(near.begin(), near.end());
+      std::int32_t k = first[i];
+      for (auto j : near)
+      {
+        while (k < first[i + 1] && links.b[k] < j)
+          ++k;
+        const bool linked = k < first[i + 1] && links.b[k] == j;
+        if (linked && links.state[k] == LinkState::intact)
+          continue;
+        out.a.push_back(static_cast<std::int32_t>(i));
+        out.b.push_back(j);
+        out.link.push_back(linked ? k : -1);
+      }
     }
+  }
+  std::size_t total = 0;
+  for (const auto& f : chunk)
+    total += f.a.size();
+  std::vector<std::int32_t> na, nb, nl;
+  na.reserve(total);
+  nb.reserve(total);
+  nl.reserve(total);
+  for (const auto& f : chunk)
+  {
+    na.insert(na.end(), f.a.begin(), f.a.end());
+    nb.insert(nb.end(), f.b.begin(), f.b.end());
+    nl.insert(nl.end(), f.link.begin(), f.link.end());
   }
   // carry the contact history over (both lists sorted by (a, b))
   std::vector<double> nfs(3 * na.size(), 0.0), nn(3 * na.size(), 0.0);
   std::vector<std::uint8_t> nt(na.size(), 0);
-  std::vector<std::int32_t> nl(na.size(), -1);
-  std::size_t q = 0, l = 0;
+  std::size_t q = 0;
   for (std::size_t p = 0; p < na.size(); ++p)
   {
     while (q < a.size() && (a[q] < na[p] || (a[q] == na[p] && b[q] < nb[p])))
@@ -127,20 +173,76 @@ bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
       }
       nt[p] = touching[q];
     }
-    while (l < link_a.size() && (link_a[l] < na[p] || (link_a[l] == na[p] && link_b[l] < nb[p])))
-      ++l;
-    if (l < link_a.size() && link_a[l] == na[p] && link_b[l] == nb[p])
-      nl[p] = static_cast<std::int32_t>(l);
   }
-  a = std::move(na);
-  b = std::move(nb);
-  fs = std::move(nfs);
-  n = std::move(nn);
-  touching = std::move(nt);
-  link = std::move(nl);
+  replace(std::move(na), std::move(nb), std::move(nl), std::move(nfs), std::move(nn),
+          std::move(nt));
   _x_build.assign(x.begin(), x.end());
   ++_builds;
   return true;
+}
+
+void NeighbourList::replace(std::vector<std::int32_t>&& na, std::vector<std::int32_t>&& nb,
+                            std::vector<std::int32_t>&& nl, std::vector<double>&& nfs,
+                            std::vector<double>&& nn, std::vector<std::uint8_t>&& nt)
+{
+  a = std::move(na);
+  b = std::move(nb);
+  link = std::move(nl);
+  fs = std::move(nfs);
+  n = std::move(nn);
+  touching = std::move(nt);
+  ++_version;
+}
+
+void NeighbourList::add_broken_links(const Links& links, std::span<const std::int32_t> ids)
+{
+  if (ids.empty())
+    return;
+  const std::size_t m = a.size() + ids.size();
+  std::vector<std::int32_t> na, nb, nl;
+  std::vector<double> nfs, nn;
+  std::vector<std::uint8_t> nt;
+  na.reserve(m);
+  nb.reserve(m);
+  nl.reserve(m);
+  nfs.reserve(3 * m);
+  nn.reserve(3 * m);
+  nt.reserve(m);
+  auto keep = [&](std::size_t q)
+  {
+    na.push_back(a[q]);
+    nb.push_back(b[q]);
+    nl.push_back(link[q]);
+    nfs.insert(nfs.end(), &fs[3 * q], &fs[3 * q] + 3);
+    nn.insert(nn.end(), &n[3 * q], &n[3 * q] + 3);
+    nt.push_back(touching[q]);
+  };
+  std::size_t q = 0;
+  for (const std::int32_t k : ids)
+  {
+    const std::int32_t ka = links.a[k], kb = links.b[k];
+    while (q < a.size() && (a[q] < ka || (a[q] == ka && b[q] < kb)))
+      keep(q++);
+    if (q < a.size() && a[q] == ka && b[q] == kb)
+      continue; // already listed
+    na.push_back(ka);
+    nb.push_back(kb);
+    nl.push_back(k);
+    nfs.insert(nfs.end(), 3, 0.0);
+    nn.insert(nn.end(), 3, 0.0);
+    nt.push_back(0);
+  }
+  while (q < a.size())
+    keep(q++);
+  replace(std::move(na), std::move(nb), std::move(nl), std::move(nfs), std::move(nn),
+          std::move(nt));
+}
+
+std::size_t NeighbourList::bytes() const
+{
+  return (a.capacity() + b.capacity() + link.capacity()) * sizeof(std::int32_t)
+         + (fs.capacity() + n.capacity() + _x_build.capacity()) * sizeof(double)
+         + touching.capacity();
 }
 
 } // namespace dembridge::dem

@@ -1,12 +1,18 @@
 #include "dembridge/dem/solver.h"
 
 #include <algorithm>
+#include <cstdint>
+#include <omp.h>
+
+#include "threads.h"
 #include <cmath>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
 namespace dembridge::dem
 {
+
 namespace
 {
 inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -26,60 +32,291 @@ ContactFactors contact_factors(const Material& m)
   return {k.kn / m.youngs_modulus, k.ks / k.kn};
 }
 
-inline void apply(Particles& p, std::int32_t i, std::int32_t j, const double* n, double fn,
-                  const Vec3& fs, double la, double lb)
+/// Thread t's spheres: [lo, hi).
+inline void thread_range(std::size_t np, int t, int nt, std::size_t& lo, std::size_t& hi)
 {
-  const auto tq = shear_torques({n[0], n[1], n[2]}, fs, la, lb);
-  for (int k = 0; k < 3; ++k)
+  lo = np * static_cast<std::size_t>(t) / static_cast<std::size_t>(nt);
+  hi = np * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(nt);
+}
+
+/// One sweep over the items of `ix` by the calling thread (call from every
+/// thread of the team; see SweepIndex). compute(i, k, out) writes item k's
+/// force on b and torque factor into out[6] and returns false if the item
+/// acts no more (out zeroed). f and q receive the sums for this thread's
+/// spheres; `reset` zeroes them first.
+/// Values per item that a sweep prepares for a whole sphere at once.
+constexpr int prepared = 8;
+/// The sweep's working copy of the spheres, one 128-byte block each:
+/// position (3), radius, rotation over the step (9); and its accumulators,
+/// one 64-byte block each: force (3), torque factor sum (3). A link then
+/// touches three cache lines of its other sphere instead of six.
+constexpr std::size_t block = 16, acc_stride = 8;
+
+/// 64-byte aligned storage for n doubles inside v.
+inline double* aligned(std::vector<double>& v, std::size_t n)
+{
+  if (v.size() < n + 8)
+    v.assign(n + 8, 0.0);
+  const auto addr = reinterpret_cast<std::uintptr_t>(v.data());
+  return v.data() + ((64 - addr % 64) % 64) / sizeof(double);
+}
+
+/// Unit normal a -> b and branch length of the items [k0, k1) of sphere i,
+/// into g[0..3] of each item's `prepared` values: done for a sphere's items
+/// together, so that the square roots and divisions of successive items
+/// overlap (the loop bodies are short and independent).
+inline void branches(const double* x, std::size_t i, std::span<const std::int32_t> b,
+                     std::int32_t k0, std::int32_t k1, double* g)
+{
+  const double* xi = x + block * i;
+  for (std::int32_t k = k0; k < k1; ++k)
   {
-    const double fb = -fn * n[k] + fs[k];
-    p.f[3 * j + k] += fb;
-    p.f[3 * i + k] -= fb;
-    p.t[3 * i + k] += tq[0][k];
-    p.t[3 * j + k] += tq[1][k];
+    const double* xj = x + block * b[k];
+    double* gk = g + prepared * (k - k0);
+    gk[0] = xj[0] - xi[0];
+    gk[1] = xj[1] - xi[1];
+    gk[2] = xj[2] - xi[2];
+    gk[3] = gk[0] * gk[0] + gk[1] * gk[1] + gk[2] * gk[2];
+  }
+  for (std::int32_t m = 0; m < k1 - k0; ++m)
+  {
+    double* gk = g + prepared * m;
+    const double D = std::sqrt(gk[3]);
+    const double inv = 1.0 / D;
+    gk[0] *= inv;
+    gk[1] *= inv;
+    gk[2] *= inv;
+    gk[3] = D;
+  }
+}
+
+/// prepare(i, k0, k1, g) fills the `prepared` values of the items of sphere
+/// i (reading state only); compute(i, k, g_k, out) then does item k.
+template <typename Prepare, typename Compute>
+void sweep(SweepIndex& ix, std::span<const std::int32_t> b, std::size_t np, bool reset,
+           double* acc, Prepare&& prepare, Compute&& compute)
+{
+  const int t = omp_get_thread_num();
+  std::size_t lo, hi;
+  thread_range(np, t, ix.threads, lo, hi);
+  const std::int32_t bhi = static_cast<std::int32_t>(hi);
+  std::vector<double>& g = ix.geometry[t];
+  std::int32_t slot = ix.cross_first[t];
+  for (std::size_t i = lo; i < hi; ++i)
+  {
+    const std::int32_t k0 = ix.first[i], k1 = ix.first[i + 1];
+    if (k1 == k0 || b[k1 - 1] < bhi) // no cross item (b sorted within i)
+      continue;
+    prepare(i, k0, k1, g.data());
+    for (std::int32_t k = k0; k < k1; ++k)
+      if (b[k] >= bhi)
+        compute(i, k, &g[prepared * (k - k0)], &ix.out[6 * slot++]);
+  }
+  if (reset)
+    std::fill(acc + acc_stride * lo, acc + acc_stride * hi, 0.0);
+#pragma omp barrier
+  // the cross items into this thread's spheres come first in item order
+  for (std::size_t j = lo; j < hi; ++j)
+    for (std::int32_t e = ix.in_first[j]; e < ix.in_first[j + 1]; ++e)
+    {
+      const double* o = &ix.out[6 * ix.in[e]];
+      for (int c = 0; c < 3; ++c)
+      {
+        acc[acc_stride * j + c] += o[c];
+        acc[acc_stride * j + 3 + c] += o[3 + c];
+      }
+    }
+  slot = ix.cross_first[t];
+  for (std::size_t i = lo; i < hi; ++i)
+  {
+    double fi[3] = {0.0, 0.0, 0.0}, qi[3] = {0.0, 0.0, 0.0};
+    const std::int32_t k0 = ix.first[i], k1 = ix.first[i + 1];
+    if (k0 == k1)
+      continue;
+    prepare(i, k0, k1, g.data());
+    for (std::int32_t k = k0; k < k1; ++k)
+    {
+      const std::int32_t j = b[k];
+      double local[6];
+      const double* o = local;
+      if (j >= bhi)
+        o = &ix.out[6 * slot++];
+      else if (compute(i, k, &g[prepared * (k - k0)], local))
+        for (int c = 0; c < 3; ++c)
+        {
+          acc[acc_stride * j + c] += local[c];
+          acc[acc_stride * j + 3 + c] += local[3 + c];
+        }
+      else
+        continue;
+      for (int c = 0; c < 3; ++c)
+      {
+        fi[c] -= o[c];
+        qi[c] += o[3 + c];
+      }
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      acc[acc_stride * i + c] += fi[c];
+      acc[acc_stride * i + 3 + c] += qi[c];
+    }
+  }
+}
+
+inline Mat3 load3x3(const double* r)
+{
+  return {r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8]};
+}
+
+/// Writes the force on b (fb, N) and the torque factor q (torque on either
+/// sphere = its radius times q, N m / m) of a pair with unit normal n, normal
+/// force fn (tension > 0), shear force fs on b, branch length D and radius
+/// sum rs (given as 1 / rs): the contact point is R_a D / rs from a, so t_a = -l_a n x fs =
+/// R_a q with q = -(D / rs) n x fs, and t_b = R_b q likewise.
+inline void pair_output(double* out, const double* n, double fn, const Vec3& fs, double D,
+                        double inv_rs)
+{
+  const Vec3 nxf = detail::cross({n[0], n[1], n[2]}, fs);
+  const double s = -D * inv_rs;
+  for (int q = 0; q < 3; ++q)
+  {
+    out[q] = -fn * n[q] + fs[q];
+    out[3 + q] = s * nxf[q];
   }
 }
 } // namespace
 
-void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
-                    ForceCounters& c)
+void SweepIndex::build(std::size_t np, std::span<const std::int32_t> a,
+                       std::span<const std::int32_t> b, int nt)
 {
-  std::vector<double> rot;
-  compute_forces(p, l, nl, mat, dt, c, rot);
+  first.assign(np + 1, 0);
+  for (std::size_t k = 0; k < a.size(); ++k)
+  {
+    if (k > 0 && (a[k] < a[k - 1] || (a[k] == a[k - 1] && b[k] <= b[k - 1])))
+      throw std::runtime_error("force loop: links and pairs must be sorted by (a, b)");
+    if (a[k] < 0 || b[k] <= a[k] || static_cast<std::size_t>(b[k]) >= np)
+      throw std::runtime_error("force loop: pair " + std::to_string(k) + " (" + std::to_string(a[k])
+                               + ", " + std::to_string(b[k]) + ") needs 0 <= a < b < "
+                               + std::to_string(np));
+    ++first[a[k] + 1];
+  }
+  for (std::size_t i = 0; i < np; ++i)
+    first[i + 1] += first[i];
+  threads = nt;
+  cross_first.assign(nt + 1, 0);
+  in_first.assign(np + 1, 0);
+  std::vector<std::int32_t> target;
+  for (int t = 0; t < nt; ++t)
+  {
+    std::size_t lo, hi;
+    thread_range(np, t, nt, lo, hi);
+    cross_first[t + 1] = cross_first[t];
+    for (std::int32_t k = first[lo]; k < first[hi]; ++k)
+      if (static_cast<std::size_t>(b[k]) >= hi)
+      {
+        ++cross_first[t + 1];
+        ++in_first[b[k] + 1];
+        target.push_back(b[k]);
+      }
+  }
+  for (std::size_t i = 0; i < np; ++i)
+    in_first[i + 1] += in_first[i];
+  in.resize(target.size());
+  std::vector<std::int32_t> fill(in_first.begin(), in_first.end() - 1);
+  for (std::size_t s = 0; s < target.size(); ++s) // slots are in item order
+    in[fill[target[s]]++] = static_cast<std::int32_t>(s);
+  out.assign(6 * target.size(), 0.0);
+  std::int32_t most = 0;
+  for (std::size_t i = 0; i < np; ++i)
+    most = std::max(most, first[i + 1] - first[i]);
+  geometry.assign(nt, std::vector<double>(prepared * most));
+}
+
+void set_min_spheres_per_thread_team(std::size_t n) { impl::min_items_per_team() = n; }
+std::size_t min_spheres_per_thread_team() { return impl::min_items_per_team(); }
+
+std::size_t SweepIndex::bytes() const
+{
+  return (first.capacity() + cross_first.capacity() + in_first.capacity() + in.capacity())
+             * sizeof(std::int32_t)
+         + out.capacity() * sizeof(double) + geometry.size() * geometry[0].capacity() * sizeof(double);
+}
+
+std::size_t ForceScratch::bytes() const
+{
+  std::size_t s = (spheres.capacity() + acc.capacity() + pair_slip.capacity()) * sizeof(double) + links.bytes()
+                  + pairs.bytes() + broken_ids.capacity() * sizeof(std::int32_t)
+                  + broken_all.capacity() * sizeof(broken_all[0]);
+  for (const auto& b : broken)
+    s += b.capacity() * sizeof(b[0]);
+  return s;
 }
 
 void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
-                    ForceCounters& c, std::vector<double>& rot)
+                    ForceCounters& c)
 {
-  // each sphere's rotation over the step, once
-  rot.resize(9 * p.size());
-  for (std::size_t i = 0; i < p.size(); ++i)
-  {
-    const Mat3 r = rotation_matrix({p.w[3 * i] * dt, p.w[3 * i + 1] * dt, p.w[3 * i + 2] * dt});
-    std::copy(r.begin(), r.end(), rot.begin() + 9 * i);
-  }
-  auto R = [&](std::int32_t i)
-  {
-    Mat3 r;
-    std::copy(rot.begin() + 9 * i, rot.begin() + 9 * i + 9, r.begin());
-    return r;
-  };
-  std::fill(p.f.begin(), p.f.end(), 0.0);
-  std::fill(p.t.begin(), p.t.end(), 0.0);
-  const LinkLaw base = mat.law(1.0, 1.0, 1.0);
+  ForceScratch s;
+  compute_forces(p, l, nl, mat, dt, c, s);
+}
 
-  // cohesive links
-  for (std::size_t k = 0; k < l.size(); ++k)
+void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
+                    ForceCounters& c, ForceScratch& s)
+{
+  const std::size_t np = p.size();
+  const int nt = impl::threads_for(np);
+  if (s.links_for != l.a.data() || s.links_size != l.size() || s.links.first.size() != np + 1
+      || s.links.threads != nt)
+  {
+    s.links.build(np, l.a, l.b, nt);
+    s.links_for = l.a.data();
+    s.links_size = l.size();
+    s.pairs_version = SIZE_MAX;
+  }
+  double* sb = aligned(s.spheres, block * np);
+  double* acc = aligned(s.acc, acc_stride * np);
+  if (s.broken.size() < static_cast<std::size_t>(nt))
+    s.broken.resize(nt);
+  for (auto& b : s.broken)
+    b.clear();
+  const LinkLaw base = mat.law(1.0, 1.0, 1.0);
+  const ContactFactors cf = contact_factors(mat);
+  const bool weighted_links = !l.weight.empty(), weighted_spheres = !p.weight.empty();
+  const double* rad = p.r.data();
+  bool short_team = false;
+
+  // a cohesive link: force on b and torque factor into out; false once broken
+  // per sphere: branches, then the trial shear forces (the stored force and
+  // the shear increment carried by the pair's rotation)
+  auto link_prepare = [&](std::size_t i, std::int32_t k0, std::int32_t k1, double* g)
+                          __attribute__((always_inline))
+  {
+    branches(sb, i, l.b, k0, k1, g);
+    const Mat3 ra = load3x3(sb + block * i + 4);
+    for (std::int32_t k = k0; k < k1; ++k)
+    {
+      double* gk = g + prepared * (k - k0);
+      const std::int32_t j = l.b[k];
+      const double inv_rs = 1.0 / (sb[block * i + 3] + sb[block * j + 3]);
+      const Vec3 tr = trial_shear({l.fs[3 * k], l.fs[3 * k + 1], l.fs[3 * k + 2]},
+                                  {l.n[3 * k], l.n[3 * k + 1], l.n[3 * k + 2]}, {gk[0], gk[1], gk[2]},
+                                  pair_rotation(ra, load3x3(sb + block * j + 4),
+                                                sb[block * i + 3] * inv_rs),
+                                  l.ks[k] * gk[3]);
+      gk[7] = inv_rs;
+      gk[4] = tr[0];
+      gk[5] = tr[1];
+      gk[6] = tr[2];
+    }
+  };
+  auto link_force = [&](std::size_t, std::int32_t k, const double* n, double* out)
+                        __attribute__((always_inline)) -> bool
   {
     if (l.state[k] != LinkState::intact)
-      continue;
-    const std::int32_t i = l.a[k], j = l.b[k];
-    double n[3];
-    for (int q = 0; q < 3; ++q)
-      n[q] = p.x[3 * j + q] - p.x[3 * i + q];
-    const double D = std::sqrt(dot3(n, n));
-    for (double& v : n)
-      v /= D;
+    {
+      std::fill(out, out + 6, 0.0);
+      return false;
+    }
+    const double D = n[3];
     LinkLaw law = base;
     law.kn = l.kn[k];
     law.ks = l.ks[k];
@@ -87,91 +324,155 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     const double delta = D - l.d0[k];
     const NormalForce nf = link_normal_force(delta, l.delta_max[k], law);
     double* fs_old = &l.fs[3 * k];
-    const double wk = l.weight.empty() ? 1.0 : l.weight[k];
+    const double wk = weighted_links ? l.weight[k] : 1.0;
+    l.delta_max[k] = nf.delta_max;
     if (nf.state == NormalState::broken)
     {
       l.state[k] = LinkState::broken_tension;
-      l.delta_max[k] = nf.delta_max;
-      c.breakage += wk * 0.5 * dot3(fs_old, fs_old) / law.ks;
+      s.broken[omp_get_thread_num()].emplace_back(k, wk * 0.5 * dot3(fs_old, fs_old) / law.ks);
       std::fill(fs_old, fs_old + 3, 0.0);
-      continue;
+      std::fill(out, out + 6, 0.0);
+      return false;
     }
-    l.delta_max[k] = nf.delta_max;
-    const double la = D * p.r[i] / (p.r[i] + p.r[j]), lb = D - la;
-    const Mat3 ra = R(i), rb = R(j);
-    const double fa = p.r[i] / (p.r[i] + p.r[j]);
-    const Vec3 nn{n[0], n[1], n[2]};
-    const Vec3 du_s = shear_increment({l.n[3 * k], l.n[3 * k + 1], l.n[3 * k + 2]}, nn, ra, rb, D, fa);
-    const Vec3 fs_rot = rotate_shear({fs_old[0], fs_old[1], fs_old[2]}, ra, rb, fa, nn);
-    const ShearForce sf = link_shear_force(fs_rot, du_s, nf.fn, law);
+    const Vec3 trial{n[4], n[5], n[6]};
+    const ShearForce sf = link_shear_cap(trial, nf.fn, law);
     if (sf.exceeded)
     {
       // Mohr-Coulomb reached: the link breaks and its elastic energy is
       // released; if the spheres touch, a contact takes over from zero shear.
       l.state[k] = LinkState::broken_shear;
-      c.breakage += wk * (0.5 * nf.fn * delta + 0.5 * (sf.fs[0] * sf.fs[0] + sf.fs[1] * sf.fs[1]
-                                                       + sf.fs[2] * sf.fs[2]) / law.ks);
+      s.broken[omp_get_thread_num()].emplace_back(
+          k, wk * (0.5 * nf.fn * delta + 0.5 * dot3(sf.fs.data(), sf.fs.data()) / law.ks));
       std::fill(fs_old, fs_old + 3, 0.0);
-      continue;
+      std::fill(out, out + 6, 0.0);
+      return false;
     }
     for (int q = 0; q < 3; ++q)
     {
       fs_old[q] = sf.fs[q];
       l.n[3 * k + q] = n[q];
     }
-    if (wk == 1.0)
-      apply(p, i, j, n, nf.fn, sf.fs, la, lb);
+    pair_output(out, n, wk * nf.fn, {wk * sf.fs[0], wk * sf.fs[1], wk * sf.fs[2]}, D, n[7]);
+    return true;
+  };
+
+#pragma omp parallel num_threads(nt)
+  {
+    if (omp_get_num_threads() != nt)
+    {
+#pragma omp atomic write
+      short_team = true;
+    }
     else
-      apply(p, i, j, n, wk * nf.fn, {wk * sf.fs[0], wk * sf.fs[1], wk * sf.fs[2]}, la, lb);
+    {
+      // each sphere's block: position, radius, rotation over the step
+#pragma omp for schedule(static)
+      for (std::size_t i = 0; i < np; ++i)
+      {
+        const Mat3 r = rotation_matrix({p.w[3 * i] * dt, p.w[3 * i + 1] * dt, p.w[3 * i + 2] * dt});
+        double* bi = sb + block * i;
+        std::copy(&p.x[3 * i], &p.x[3 * i] + 3, bi);
+        bi[3] = rad[i];
+        std::copy(r.begin(), r.end(), bi + 4);
+      }
+      sweep(s.links, l.b, np, true, acc, link_prepare, link_force);
+    }
+  }
+  if (short_team)
+    throw std::runtime_error("force loop: OpenMP gave fewer threads than asked (set OMP_DYNAMIC=false)");
+
+  // links broken now: energy booked in link order, their pairs handed to the
+  // contacts within this step
+  s.broken_all.clear();
+  for (const auto& b : s.broken)
+    s.broken_all.insert(s.broken_all.end(), b.begin(), b.end());
+  std::sort(s.broken_all.begin(), s.broken_all.end());
+  s.broken_ids.clear();
+  for (const auto& [k, e] : s.broken_all)
+  {
+    c.breakage += e;
+    s.broken_ids.push_back(k);
+  }
+  nl.add_broken_links(l, s.broken_ids);
+  if (s.pairs_version != nl.version() || s.pairs.first.size() != np + 1 || s.pairs.threads != nt)
+  {
+    s.pairs.build(np, nl.a, nl.b, nt);
+    s.pair_slip.assign(nl.size(), 0.0);
+    s.pairs_version = nl.version();
   }
 
   // contacts between spheres without an intact link
-  const ContactFactors cf = contact_factors(mat);
-  for (std::size_t q = 0; q < nl.size(); ++q)
+  const double pi = std::numbers::pi;
+  auto contact_force = [&](std::size_t i, std::int32_t q, const double* n, double* out)
+                           __attribute__((always_inline)) -> bool
   {
+    s.pair_slip[q] = 0.0;
     const std::int32_t lk = nl.link[q];
-    if (lk >= 0 && l.state[lk] == LinkState::intact)
-      continue;
-    const std::int32_t i = nl.a[q], j = nl.b[q];
-    double n[3];
-    for (int k = 0; k < 3; ++k)
-      n[k] = p.x[3 * j + k] - p.x[3 * i + k];
-    const double D = std::sqrt(dot3(n, n));
-    const double rs = p.r[i] + p.r[j];
+    const std::int32_t j = nl.b[q];
+    const double D = n[3];
+    const double rs = rad[i] + rad[j];
     double* fs_old = &nl.fs[3 * q];
-    if (D >= rs)
+    if ((lk >= 0 && l.state[lk] == LinkState::intact) || D >= rs)
     {
       nl.touching[q] = 0;
       std::fill(fs_old, fs_old + 3, 0.0);
-      continue;
+      std::fill(out, out + 6, 0.0);
+      return false;
     }
-    for (double& v : n)
-      v /= D;
     LinkLaw law = base;
-    law.s_int = interaction_surface(p.r[i], p.r[j]);
+    const double rm = std::min(rad[i], rad[j]);
+    law.s_int = pi * rm * rm; // as interaction_surface
     law.kn = mat.youngs_modulus * law.s_int / rs * cf.cn;
     law.ks = law.kn * cf.cs;
     const double fn = contact_normal_force(D, rs, law.kn);
-    const double la = D * p.r[i] / rs, lb = D - la;
     const double* n_old = nl.touching[q] ? &nl.n[3 * q] : n;
-    const Mat3 ra = R(i), rb = R(j);
-    const double fa = p.r[i] / rs;
-    const Vec3 nn{n[0], n[1], n[2]};
-    const Vec3 du_s = shear_increment({n_old[0], n_old[1], n_old[2]}, nn, ra, rb, D, fa);
-    Vec3 fs_rot{0.0, 0.0, 0.0};
-    if (nl.touching[q])
-      fs_rot = rotate_shear({fs_old[0], fs_old[1], fs_old[2]}, ra, rb, fa, nn);
-    const ShearForce sf = contact_shear_force(fs_rot, du_s, fn, law);
-    const double wq = p.weight.empty() ? 1.0 : 0.5 * (p.weight[i] + p.weight[j]);
-    c.friction += wq * sf.slip_energy;
+    const Vec3 fs_prev = nl.touching[q] ? Vec3{fs_old[0], fs_old[1], fs_old[2]} : Vec3{0, 0, 0};
+    const Vec3 trial = trial_shear(fs_prev, {n_old[0], n_old[1], n_old[2]}, {n[0], n[1], n[2]},
+                                   pair_rotation(load3x3(sb + block * i + 4),
+                                                 load3x3(sb + block * j + 4), rad[i] / rs),
+                                   law.ks * D);
+    const ShearForce sf = contact_shear_cap(trial, fn, law);
+    const double wq = weighted_spheres ? 0.5 * (p.weight[i] + p.weight[j]) : 1.0;
+    s.pair_slip[q] = wq * sf.slip_energy;
     for (int k = 0; k < 3; ++k)
     {
       fs_old[k] = sf.fs[k];
       nl.n[3 * q + k] = n[k];
     }
     nl.touching[q] = 1;
-    apply(p, i, j, n, wq * fn, {wq * sf.fs[0], wq * sf.fs[1], wq * sf.fs[2]}, la, lb);
+    pair_output(out, n, wq * fn, {wq * sf.fs[0], wq * sf.fs[1], wq * sf.fs[2]}, D, 1.0 / rs);
+    return true;
+  };
+
+#pragma omp parallel num_threads(nt)
+  {
+    if (omp_get_num_threads() == nt)
+    {
+      sweep(s.pairs, nl.b, np, false, acc,
+            [&](std::size_t i, std::int32_t k0, std::int32_t k1, double* g)
+            { branches(sb, i, nl.b, k0, k1, g); },
+            contact_force);
+      // forces; torques: each sphere's radius times its summed torque factors
+      std::size_t lo, hi;
+      thread_range(np, omp_get_thread_num(), nt, lo, hi);
+      for (std::size_t i = lo; i < hi; ++i)
+        for (int k = 0; k < 3; ++k)
+        {
+          p.f[3 * i + k] = acc[acc_stride * i + k];
+          p.t[3 * i + k] = rad[i] * acc[acc_stride * i + 3 + k];
+        }
+    }
+    else
+    {
+#pragma omp atomic write
+      short_team = true;
+    }
   }
+  if (short_team)
+    throw std::runtime_error("force loop: OpenMP gave fewer threads than asked (set OMP_DYNAMIC=false)");
+  // friction, summed in pair order
+  for (std::size_t q = 0; q < s.pair_slip.size(); ++q)
+    c.friction += s.pair_slip[q];
 }
 
 double elastic_energy(const Particles& p, const Links& l, const NeighbourList& nl,
@@ -320,7 +621,33 @@ DemSolver::DemSolver(Particles& p, Links& l, const Material& mat, double dt, dou
   _fext.assign(3 * p.size(), 0.0);
   _fext_old.assign(3 * p.size(), 0.0);
   _reac.assign(3 * p.size(), 0.0);
-  _fold.assign(3 * p.size(), 0.0);
+}
+
+std::size_t DemSolver::bytes() const
+{
+  return _held.capacity() + (_held_dofs.capacity()) * sizeof(std::int32_t)
+         + (_fext.capacity() + _fext_old.capacity() + _reac.capacity() + _fold.capacity()
+            + _vold.capacity() + _part.capacity())
+               * sizeof(double)
+         + _scratch.bytes() + _nl.bytes();
+}
+
+void DemSolver::update_held()
+{
+  std::fill(_held.begin(), _held.end(), 0);
+  for (const auto& m : _motions)
+    for (auto i : m.ids)
+      for (int k = 0; k < 6; ++k)
+        if (m.kind == MotionKind::fixed || (k < 3 && m.components[k]))
+          _held[6 * i + k] = 1;
+  _held_dofs.clear();
+  for (std::size_t i = 0; i < _p.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      if (_held[6 * i + k])
+        _held_dofs.push_back(static_cast<std::int32_t>(3 * i + k));
+  _fold.assign(_held_dofs.size(), 0.0);
+  _vold.assign(_held_dofs.size(), 0.0);
+  std::fill(_reac.begin(), _reac.end(), 0.0);
 }
 
 void DemSolver::set_damping(double c)
@@ -350,17 +677,10 @@ void DemSolver::add_motion(ParticleMotion m)
   if (m.kind != MotionKind::fixed && !m.value)
     throw std::runtime_error("condition '" + m.name + "' needs a history");
   for (auto i : m.ids)
-  {
     if (i < 0 || static_cast<std::size_t>(i) >= _p.size())
       throw std::runtime_error("condition '" + m.name + "': sphere index out of range");
-    for (int k = 0; k < 3; ++k)
-      if (m.kind == MotionKind::fixed || m.components[k])
-        _held[6 * i + k] = 1;
-    if (m.kind == MotionKind::fixed)
-      for (int k = 3; k < 6; ++k)
-        _held[6 * i + k] = 1;
-  }
   _motions.push_back(std::move(m));
+  update_held();
 }
 
 void DemSolver::remove_motion(const std::string& name)
@@ -370,12 +690,7 @@ void DemSolver::remove_motion(const std::string& name)
   if (it == _motions.end())
     throw std::runtime_error("remove_motion: no condition named '" + name + "'");
   _motions.erase(it);
-  std::fill(_held.begin(), _held.end(), 0);
-  for (const auto& m : _motions)
-    for (auto i : m.ids)
-      for (int k = 0; k < 6; ++k)
-        if (m.kind == MotionKind::fixed || (k < 3 && m.components[k]))
-          _held[6 * i + k] = 1;
+  update_held();
 }
 
 void DemSolver::add_force(ParticleForce f)
@@ -404,8 +719,8 @@ void external(const std::vector<ParticleForce>& forces, double t, std::vector<do
 
 void DemSolver::start()
 {
-  _nl.update(_p.x, _p.r, _l.a, _l.b);
-  compute_forces(_p, _l, _nl, _mat, 0.0, _counters);
+  _nl.update(_p.x, _p.r, _l);
+  compute_forces(_p, _l, _nl, _mat, 0.0, _counters, _scratch);
   external(_forces, _t, _fext);
   _e = DemEnergy{};
   const DemEnergy e = energy();
@@ -415,15 +730,17 @@ void DemSolver::start()
 void DemSolver::kick(double h)
 {
   const std::size_t n = _p.size();
+  const double ch = _c * h;
+#pragma omp parallel for schedule(static) num_threads(impl::threads_for(n))
   for (std::size_t i = 0; i < n; ++i)
   {
     const double im = h / _p.m[i], iI = h / _p.inertia[i];
     for (int k = 0; k < 3; ++k)
     {
       if (!_held[6 * i + k])
-        _p.v[3 * i + k] += (_p.f[3 * i + k] + _fext[3 * i + k]) * im - _c * h * _p.v[3 * i + k];
+        _p.v[3 * i + k] += (_p.f[3 * i + k] + _fext[3 * i + k]) * im - ch * _p.v[3 * i + k];
       if (!_held[6 * i + 3 + k])
-        _p.w[3 * i + k] += _p.t[3 * i + k] * iI - _c * h * _p.w[3 * i + k];
+        _p.w[3 * i + k] += _p.t[3 * i + k] * iI - ch * _p.w[3 * i + k];
     }
   }
 }
@@ -436,13 +753,14 @@ void DemSolver::step()
 
 void DemSolver::begin_step()
 {
-  const std::size_t n = _p.size();
+  const double t0 = omp_get_wtime();
   const double dt = _dt, t_new = _t + dt;
-  std::vector<double>& v_old = _reac; // scratch until end_step: v(n)
-  for (std::size_t i = 0; i < 3 * n; ++i)
+  // v(n) and F(n) of the held translations, for their reactions
+  for (std::size_t q = 0; q < _held_dofs.size(); ++q)
   {
-    _fold[i] = _p.f[i] + _fext[i];
-    v_old[i] = _p.v[i];
+    const std::int32_t d = _held_dofs[q];
+    _fold[q] = _p.f[d] + _fext[d];
+    _vold[q] = _p.v[d];
   }
   kick(0.5 * dt);
   for (const auto& m : _motions)
@@ -461,6 +779,7 @@ void DemSolver::begin_step()
                   : (_p.x0[3 * i + k] + m.value(t_new) - _p.x[3 * i + k]) / dt;
       }
   _in_step = true;
+  _time.integration += omp_get_wtime() - t0;
 }
 
 void DemSolver::end_step()
@@ -468,41 +787,66 @@ void DemSolver::end_step()
   if (!_in_step)
     throw std::runtime_error("DemSolver::end_step without begin_step");
   _in_step = false;
+  const double t0 = omp_get_wtime();
   const std::size_t n = _p.size();
   const double dt = _dt, t_new = _t + dt;
-  const std::vector<double>& v_old = _reac;
-  double w_ext = 0.0, w_damp = 0.0;
   std::swap(_fext_old, _fext); // no allocation in the step loop
-  external(_forces, t_new, _fext);
+  const bool loaded = !_forces.empty();
+  if (loaded)
+    external(_forces, t_new, _fext);
   const std::vector<double>& fext_old = _fext_old;
-  for (std::size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k)
+  // drift, with the work of external forces and of damping summed in fixed
+  // blocks (the same sums whatever the thread count)
+  constexpr std::size_t block = 1024;
+  const std::size_t nb = (n + block - 1) / block;
+  _part.resize(2 * nb);
+#pragma omp parallel for schedule(static) num_threads(impl::threads_for(n))
+  for (std::size_t b = 0; b < nb; ++b)
+  {
+    double we = 0.0, wd = 0.0;
+    for (std::size_t i = b * block; i < std::min(n, (b + 1) * block); ++i)
     {
-      const double vh = _p.v[3 * i + k];
-      _p.x[3 * i + k] += dt * vh;
-      w_ext += dt * vh * 0.5 * (fext_old[3 * i + k] + _fext[3 * i + k]);
-      w_damp += dt * _c * (_p.m[i] * vh * vh + _p.inertia[i] * _p.w[3 * i + k] * _p.w[3 * i + k]);
+      double v2 = 0.0, w2 = 0.0;
+      for (int k = 0; k < 3; ++k)
+      {
+        const double vh = _p.v[3 * i + k];
+        _p.x[3 * i + k] += dt * vh;
+        if (loaded)
+          we += dt * vh * 0.5 * (fext_old[3 * i + k] + _fext[3 * i + k]);
+        v2 += vh * vh;
+        w2 += _p.w[3 * i + k] * _p.w[3 * i + k];
+      }
+      wd += dt * _c * (_p.m[i] * v2 + _p.inertia[i] * w2);
     }
-  _nl.update(_p.x, _p.r, _l.a, _l.b);
-  compute_forces(_p, _l, _nl, _mat, dt, _counters, _rot);
+    _part[2 * b] = we;
+    _part[2 * b + 1] = wd;
+  }
+  double w_ext = 0.0, w_damp = 0.0;
+  for (std::size_t b = 0; b < nb; ++b)
+  {
+    w_ext += _part[2 * b];
+    w_damp += _part[2 * b + 1];
+  }
+  const double t1 = omp_get_wtime();
+  _nl.update(_p.x, _p.r, _l);
+  const double t2 = omp_get_wtime();
+  compute_forces(_p, _l, _nl, _mat, dt, _counters, _scratch);
+  const double t3 = omp_get_wtime();
+  _time.neighbours += t2 - t1;
+  _time.forces += t3 - t2;
   // reactions on held translations: m (v_new - v_old) = dt/2 (F_old + F_new) + dt R
   double w_presc = 0.0;
-  for (std::size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k)
-    {
-      if (!_held[6 * i + k])
-        continue;
-      const double vh = _p.v[3 * i + k];
-      const double F_new = _p.f[3 * i + k] + _fext[3 * i + k] - _c * _p.m[i] * vh;
-      const double F_old = _fold[3 * i + k] - _c * _p.m[i] * vh;
-      const double R = _p.m[i] * (vh - v_old[3 * i + k]) / dt - 0.5 * (F_old + F_new);
-      w_presc += dt * vh * R;
-      _reac[3 * i + k] = R;
-    }
-  for (std::size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k)
-      if (!_held[6 * i + k])
-        _reac[3 * i + k] = 0.0;
+  for (std::size_t q = 0; q < _held_dofs.size(); ++q)
+  {
+    const std::int32_t d = _held_dofs[q];
+    const std::size_t i = static_cast<std::size_t>(d) / 3;
+    const double vh = _p.v[d];
+    const double F_new = _p.f[d] + _fext[d] - _c * _p.m[i] * vh;
+    const double F_old = _fold[q] - _c * _p.m[i] * vh;
+    const double R = _p.m[i] * (vh - _vold[q]) / dt - 0.5 * (F_old + F_new);
+    w_presc += dt * vh * R;
+    _reac[d] = R;
+  }
   kick(0.5 * dt);
   for (const auto& m : _motions)
     if (m.kind == MotionKind::velocity)
@@ -516,7 +860,9 @@ void DemSolver::end_step()
   _e.damping += w_damp;
   _e.prescribed_work += w_presc;
 
+  // any NaN or infinity makes the sum non-finite, whatever the order
   double check = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : check) num_threads(impl::threads_for(n))
   for (std::size_t i = 0; i < 3 * n; ++i)
     check += _p.x[i] + _p.v[i] + _p.w[i];
   if (!std::isfinite(check))
@@ -529,6 +875,7 @@ void DemSolver::end_step()
       << " s (step " << _steps << "): the run is unstable; reduce the time step";
     throw std::runtime_error(s.str());
   }
+  _time.integration += (t1 - t0) + (omp_get_wtime() - t3);
 }
 
 DemEnergy DemSolver::energy() const

@@ -5,7 +5,9 @@
 /// the history passed in and out. Forces in N, lengths in m. Sign convention:
 /// normal force F_n > 0 in tension; the compression force is F_c = -F_n.
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 
 namespace dembridge::dem
 {
@@ -85,7 +87,21 @@ Vec3 shear_increment(const Vec3& n_old, const Vec3& n_new, const Mat3& ra, const
 /// rigid motion turns it exactly with the pair.
 Vec3 rotate_shear(const Vec3& fs, const Mat3& ra, const Mat3& rb, double fa, const Vec3& n_new);
 
-/// Result of the shear law.
+/// The pair's rotation over the step, f_a R_a + f_b R_b (the matrix both
+/// shear_increment and rotate_shear apply, before projecting).
+Mat3 pair_rotation(const Mat3& ra, const Mat3& rb, double fa);
+
+/// Trial shear force of the step, before any cap, in one product:
+///   fs_trial = P (Rp (fs_old + K_s D n_old)),
+/// with Rp = pair_rotation(ra, rb, f_a) and P the projection on the tangent
+/// plane of n_new. Both rotate_shear and shear_increment are Rp then P, and
+/// linear, so this equals rotate_shear(fs_old) - K_s shear_increment(n_old)
+/// to round-off, at a third of the cost (what the force loop uses).
+/// @param ks_d K_s times the branch length D [N]
+Vec3 trial_shear(const Vec3& fs_old, const Vec3& n_old, const Vec3& n_new, const Mat3& rp,
+                 double ks_d);
+
+
 struct ShearForce
 {
   Vec3 fs;            ///< shear force on b (the force on a is -fs) [N]
@@ -100,6 +116,8 @@ struct ShearForce
 /// @param du_s tangential relative displacement increment of b w.r.t. a [m]
 /// @param fn normal force (tension > 0) [N]
 ShearForce link_shear_force(const Vec3& fs, const Vec3& du_s, double fn, const LinkLaw& p);
+/// The same cap applied to a trial force already computed (trial_shear).
+ShearForce link_shear_cap(const Vec3& fs_trial, double fn, const LinkLaw& p);
 
 /// Normal force of a contact (no link): compression only,
 /// F_n = -K_n (R_a + R_b - D) when D < R_a + R_b, else 0.
@@ -109,6 +127,8 @@ double contact_normal_force(double distance, double radius_sum, double kn);
 /// |fs| <= F_c tan(phi_c); on sliding fs is scaled back to the cap and the
 /// dissipated energy (cap x slip) is returned.
 ShearForce contact_shear_force(const Vec3& fs, const Vec3& du_s, double fn, const LinkLaw& p);
+/// The same cap applied to a trial force already computed (trial_shear).
+ShearForce contact_shear_cap(const Vec3& fs_trial, double fn, const LinkLaw& p);
 
 /// Torques from a shear force fs acting on b (and -fs on a) at the contact
 /// point, which lies at l_a n from a's centre and -l_b n from b's (n the unit
@@ -117,5 +137,199 @@ ShearForce contact_shear_force(const Vec3& fs, const Vec3& du_s, double fn, cons
 /// l_a + l_b = D (lever arms in proportion to the radii) a rigid rotation of
 /// the pair gives no relative motion at that point (objectivity).
 std::array<Vec3, 2> shear_torques(const Vec3& n, const Vec3& fs, double l_a, double l_b);
+
+// ---------------------------------------------------------------------------
+// Definitions, inline so that the force loop compiles them into its sweep
+// (the common cases avoid divisions and square roots).
+namespace detail
+{
+inline double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline Vec3 cross(const Vec3& a, const Vec3& b)
+{
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+inline Vec3 mul(const Mat3& r, const Vec3& v)
+{
+  return {r[0] * v[0] + r[1] * v[1] + r[2] * v[2], r[3] * v[0] + r[4] * v[1] + r[5] * v[2],
+          r[6] * v[0] + r[7] * v[1] + r[8] * v[2]};
+}
+/// sin(a)/a and (1 - cos a)/a^2 for a^2 = a2 (series for small angles:
+/// next terms below 1e-19 for a < 1e-2).
+inline void rodrigues_factors(double a2, double& sa, double& ca)
+{
+  if (a2 < 1e-4)
+  {
+    sa = 1.0 - a2 / 6.0 + a2 * a2 / 120.0 - a2 * a2 * a2 / 5040.0;
+    ca = 0.5 - a2 / 24.0 + a2 * a2 / 720.0 - a2 * a2 * a2 / 40320.0;
+  }
+  else
+  {
+    const double a = std::sqrt(a2);
+    sa = std::sin(a) / a;
+    ca = (1.0 - std::cos(a)) / a2;
+  }
+}
+} // namespace detail
+
+inline double link_envelope(double d, const LinkLaw& p)
+{
+  const double f_peak = p.s_int * p.tensile;
+  const double de = f_peak / p.kn;
+  if (d <= de)
+    return p.kn * d;
+  const double dr = (1.0 + p.zeta) * de;
+  if (d >= dr)
+    return 0.0;
+  return f_peak - p.kn / p.zeta * (d - de);
+}
+
+inline NormalForce link_normal_force(double delta, double delta_max, const LinkLaw& p)
+{
+  const double f_peak = p.s_int * p.tensile;
+  const double dm = std::max(delta, delta_max);
+  // never beyond the elastic limit (K_n dm <= S_int T): elastic
+  if (p.kn * dm <= f_peak)
+    return {p.kn * delta, delta > 0.0 ? dm : delta_max, NormalState::elastic};
+  const double de = f_peak / p.kn;
+  const double dr = (1.0 + p.zeta) * de;
+  if (delta <= 0.0)
+    return {p.kn * delta, delta_max, NormalState::softening}; // compression: elastic
+  if (dm >= dr)
+    return {0.0, dm, NormalState::broken};
+  // softened: on the envelope at dm, on the secant below it
+  const double f_dm = f_peak - p.kn / p.zeta * (dm - de);
+  return {f_dm / dm * delta, dm, NormalState::softening};
+}
+
+inline double softening_dissipation(double delta_max, const LinkLaw& p)
+{
+  const double f_peak = p.s_int * p.tensile;
+  const double de = f_peak / p.kn;
+  if (delta_max <= de)
+    return 0.0;
+  const double dr = (1.0 + p.zeta) * de;
+  const double dm = std::min(delta_max, dr);
+  const double f_dm = link_envelope(dm, p);
+  const double work = 0.5 * f_peak * de + 0.5 * (f_peak + f_dm) * (dm - de);
+  return work - 0.5 * f_dm * dm;
+}
+
+inline Vec3 rotate(const Vec3& th, const Vec3& v)
+{
+  double sa, ca;
+  detail::rodrigues_factors(detail::dot(th, th), sa, ca);
+  const Vec3 t = detail::cross(th, v);
+  const Vec3 tt = detail::cross(th, t);
+  return {v[0] + sa * t[0] + ca * tt[0], v[1] + sa * t[1] + ca * tt[1],
+          v[2] + sa * t[2] + ca * tt[2]};
+}
+
+inline Mat3 rotation_matrix(const Vec3& th)
+{
+  // R = I + sa [th]x + ca [th]x^2, with [th]x^2 = th th^T - |th|^2 I
+  const double a2 = detail::dot(th, th);
+  double sa, ca;
+  detail::rodrigues_factors(a2, sa, ca);
+  const double d = 1.0 - ca * a2;
+  return {d + ca * th[0] * th[0],       ca * th[0] * th[1] - sa * th[2], ca * th[0] * th[2] + sa * th[1],
+          ca * th[1] * th[0] + sa * th[2], d + ca * th[1] * th[1],       ca * th[1] * th[2] - sa * th[0],
+          ca * th[2] * th[0] - sa * th[1], ca * th[2] * th[1] + sa * th[0], d + ca * th[2] * th[2]};
+}
+
+inline Vec3 shear_increment(const Vec3& n_old, const Vec3& n_new, const Mat3& ra, const Mat3& rb,
+                            double d, double fa)
+{
+  const Vec3 ma = detail::mul(ra, n_old), mb = detail::mul(rb, n_old);
+  const double fb = 1.0 - fa;
+  const double pa = detail::dot(ma, n_new), pb = detail::dot(mb, n_new);
+  Vec3 du;
+  for (int k = 0; k < 3; ++k)
+    du[k] = -d * (fa * (ma[k] - pa * n_new[k]) + fb * (mb[k] - pb * n_new[k]));
+  return du;
+}
+
+inline Vec3 rotate_shear(const Vec3& fs, const Mat3& ra, const Mat3& rb, double fa,
+                         const Vec3& n_new)
+{
+  const Vec3 a = detail::mul(ra, fs), b = detail::mul(rb, fs);
+  const double fb = 1.0 - fa;
+  Vec3 r{fa * a[0] + fb * b[0], fa * a[1] + fb * b[1], fa * a[2] + fb * b[2]};
+  const double rn = detail::dot(r, n_new);
+  for (int k = 0; k < 3; ++k)
+    r[k] -= rn * n_new[k];
+  return r;
+}
+
+inline Mat3 pair_rotation(const Mat3& ra, const Mat3& rb, double fa)
+{
+  const double fb = 1.0 - fa;
+  Mat3 r;
+  for (int k = 0; k < 9; ++k)
+    r[k] = fa * ra[k] + fb * rb[k];
+  return r;
+}
+
+inline Vec3 trial_shear(const Vec3& fs_old, const Vec3& n_old, const Vec3& n_new, const Mat3& rp,
+                        double ks_d)
+{
+  const Vec3 v{fs_old[0] + ks_d * n_old[0], fs_old[1] + ks_d * n_old[1],
+               fs_old[2] + ks_d * n_old[2]};
+  Vec3 r = detail::mul(rp, v);
+  const double rn = detail::dot(r, n_new);
+  for (int k = 0; k < 3; ++k)
+    r[k] -= rn * n_new[k];
+  return r;
+}
+
+inline ShearForce link_shear_force(const Vec3& fs, const Vec3& du_s, double fn, const LinkLaw& p)
+{
+  return link_shear_cap({fs[0] - p.ks * du_s[0], fs[1] - p.ks * du_s[1], fs[2] - p.ks * du_s[2]},
+                        fn, p);
+}
+
+inline ShearForce link_shear_cap(const Vec3& fs_trial, double fn, const LinkLaw& p)
+{
+  ShearForce out{fs_trial, false, 0.0};
+  const double fc = -fn; // compression positive
+  const double cap = std::max(p.s_int * p.cohesion + fc * p.tan_phi_i, 0.0);
+  out.exceeded = detail::dot(out.fs, out.fs) > cap * cap;
+  return out;
+}
+
+inline double contact_normal_force(double distance, double radius_sum, double kn)
+{
+  return distance < radius_sum ? -kn * (radius_sum - distance) : 0.0;
+}
+
+inline ShearForce contact_shear_force(const Vec3& fs, const Vec3& du_s, double fn, const LinkLaw& p)
+{
+  return contact_shear_cap({fs[0] - p.ks * du_s[0], fs[1] - p.ks * du_s[1], fs[2] - p.ks * du_s[2]},
+                           fn, p);
+}
+
+inline ShearForce contact_shear_cap(const Vec3& fs_trial, double fn, const LinkLaw& p)
+{
+  ShearForce out{fs_trial, false, 0.0};
+  const double cap = std::max(-fn, 0.0) * p.tan_phi_c;
+  const double mag2 = detail::dot(out.fs, out.fs);
+  if (mag2 > cap * cap)
+  {
+    const double mag = std::sqrt(mag2);
+    out.exceeded = true;
+    const double scale = mag > 0.0 ? cap / mag : 0.0;
+    // slip = (mag - cap) / ks against the capped force
+    out.slip_energy = cap * (mag - cap) / p.ks;
+    for (auto& f : out.fs)
+      f *= scale;
+  }
+  return out;
+}
+
+inline std::array<Vec3, 2> shear_torques(const Vec3& n, const Vec3& fs, double l_a, double l_b)
+{
+  const Vec3 nxf = detail::cross(n, fs);
+  return {Vec3{-l_a * nxf[0], -l_a * nxf[1], -l_a * nxf[2]},
+          Vec3{-l_b * nxf[0], -l_b * nxf[1], -l_b * nxf[2]}};
+}
 
 } // namespace dembridge::dem

@@ -5,6 +5,8 @@
 /// (shear force) that survives rebuilds. The list is rebuilt only when a
 /// sphere has moved more than half the skin since the last build.
 
+#include "dembridge/dem/assembly.h"
+
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -67,14 +69,23 @@ public:
   explicit NeighbourList(double skin);
 
   /// Rebuilds if a sphere moved more than skin/2 since the last build (or
-  /// never built). Returns true if it rebuilt. Links (sorted a < b) are
-  /// matched to pairs so the force loop knows which pairs are bonded.
-  bool update(std::span<const double> x, std::span<const double> r,
-              std::span<const std::int32_t> link_a, std::span<const std::int32_t> link_b);
+  /// never built). Returns true if it rebuilt. Pairs joined by an intact link
+  /// are left out (the link acts there); a pair whose link is broken is
+  /// listed, with its link index, like any other.
+  bool update(std::span<const double> x, std::span<const double> r, const Links& links);
+
+  /// Adds the pairs of links that have just broken (sorted by link index,
+  /// hence by (a, b)), with no contact history, so a contact can take over
+  /// within the same step; pairs already listed are skipped.
+  void add_broken_links(const Links& links, std::span<const std::int32_t> ids);
 
   std::size_t size() const { return a.size(); }
   std::size_t builds() const { return _builds; }
+  /// Changes whenever the list of pairs changes (rebuild or added pairs).
+  std::size_t version() const { return _version; }
   double skin() const { return _skin; }
+  /// Bytes held by the list.
+  std::size_t bytes() const;
 
   std::vector<std::int32_t> a, b;  ///< pairs, a < b, sorted
   std::vector<std::int32_t> link;  ///< link index of the pair, or -1
@@ -83,8 +94,11 @@ public:
   std::vector<std::uint8_t> touching; ///< 1 while the pair is in contact
 
 private:
+  void replace(std::vector<std::int32_t>&& na, std::vector<std::int32_t>&& nb,
+               std::vector<std::int32_t>&& nl, std::vector<double>&& nfs, std::vector<double>&& nn,
+               std::vector<std::uint8_t>&& nt);
   double _skin;
-  std::size_t _builds = 0;
+  std::size_t _builds = 0, _version = 0;
   std::vector<double> _x_build;
 };
 

@@ -3,12 +3,17 @@
 /// The DEM force loop (it only calls the laws of law.h) and the explicit
 /// integrator (velocity Verlet: half kick, drift, forces, half kick) with
 /// boundary conditions on particle sets, velocity-proportional damping and
-/// the energy budget. Single-threaded for now.
+/// the energy budget. OpenMP threads over links and spheres; results do not
+/// depend on the thread count.
 
 #include "dembridge/dem/assembly.h"
 #include "dembridge/dem/neighbours.h"
 
 #include <array>
+#include <climits>
+#include <cstdint>
+#include <utility>
+#include <vector>
 #include <functional>
 #include <span>
 #include <string>
@@ -23,16 +28,61 @@ struct ForceCounters
   double breakage = 0.0;   ///< elastic energy released when links break
 };
 
+/// How the items of the force loop (links, or neighbour pairs; sorted by
+/// (a, b)) are shared between T threads: thread t owns the spheres
+/// [n t / T, n (t + 1) / T) and computes the items whose a it owns, adding
+/// each item's force to both spheres. Items whose b belongs to a later
+/// thread ("cross" items) are computed first into a buffer, which their b
+/// sphere reads before its own items: every sphere then sums its items in the
+/// same order (b side in item order, then a side) whatever T is.
+struct SweepIndex
+{
+  std::vector<std::int32_t> first;      ///< items with a = i: [first[i], first[i + 1])
+  std::vector<std::int32_t> cross_first; ///< first buffer slot of each thread (T + 1)
+  std::vector<std::int32_t> in_first, in; ///< slots of the cross items into sphere b (CSR)
+  std::vector<double> out;              ///< per cross item: force on b (3), torque factor q (3)
+  std::vector<std::vector<double>> geometry; ///< per thread: branches of one sphere's items
+  int threads = 0;
+  /// @throws std::runtime_error if the items are not sorted or out of range
+  void build(std::size_t np, std::span<const std::int32_t> a, std::span<const std::int32_t> b,
+             int threads);
+  std::size_t bytes() const;
+};
+
+/// Scratch space and index structures of the force loop, kept between calls
+/// so that a step allocates nothing (once sized). Rebuilt by compute_forces
+/// when the links, the neighbour pairs or the thread count change.
+struct ForceScratch
+{
+  std::vector<double> spheres;   ///< per sphere: position, radius, rotation over the step
+  std::vector<double> acc;       ///< per sphere: force and torque-factor sums
+  SweepIndex links, pairs;
+  std::vector<double> pair_slip; ///< per pair: energy dissipated by friction in the step [J]
+  std::vector<std::vector<std::pair<std::int32_t, double>>> broken; ///< per thread
+  std::vector<std::pair<std::int32_t, double>> broken_all;
+  std::vector<std::int32_t> broken_ids;
+  const std::int32_t* links_for = nullptr; ///< the link array the index was built for
+  std::size_t links_size = 0, pairs_version = SIZE_MAX;
+  std::size_t bytes() const;
+};
+
 /// Computes forces and torques on all particles from the intact links and
 /// the contacts, using p.w as the angular velocity over the step (the
 /// spheres' rotations R = exp(omega dt), for the incremental shear). Updates
-/// link and contact history, breaks links. Forces are zeroed first.
-/// @param rotations scratch space (9 per particle), reused between calls
+/// link and contact history, breaks links (a link broken now hands over to a
+/// contact in the same call). Each link's force is computed once; each
+/// sphere gathers its links' forces in a fixed order, so the result is the
+/// same bit for bit whatever the number of OpenMP threads.
 void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
-                    ForceCounters& c, std::vector<double>& rotations);
+                    ForceCounters& c, ForceScratch& scratch);
 /// Same, with its own scratch space.
 void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
                     ForceCounters& c);
+
+/// Assemblies of fewer spheres than this run their step on one thread (the
+/// team's start and barriers would cost more than they save); default 4096.
+void set_min_spheres_per_thread_team(std::size_t n);
+std::size_t min_spheres_per_thread_team();
 
 /// Elastic energy stored in intact links and contacts [J].
 double elastic_energy(const Particles& p, const Links& l, const NeighbourList& nl,
@@ -96,6 +146,14 @@ struct DemEnergy
   }
 };
 
+/// Wall time spent in each part of the steps so far [s].
+struct DemTimings
+{
+  double forces = 0.0;      ///< compute_forces
+  double neighbours = 0.0;  ///< neighbour-list checks and rebuilds
+  double integration = 0.0; ///< kicks, drift, conditions, reactions, checks
+};
+
 class DemSolver
 {
 public:
@@ -133,9 +191,14 @@ public:
   double dt() const { return _dt; }
   void set_damping(double c);
   const NeighbourList& neighbours() const { return _nl; }
+  /// Bytes held by the solver's own arrays and scratch (the neighbour list
+  /// included; the particles and links are the caller's).
+  std::size_t bytes() const;
+  const DemTimings& timings() const { return _time; }
 
 private:
   void kick(double h);
+  void update_held();
   Particles& _p;
   Links& _l;
   Material _mat;
@@ -144,11 +207,14 @@ private:
   std::vector<ParticleMotion> _motions;
   std::vector<ParticleForce> _forces;
   std::vector<std::uint8_t> _held;      // per particle and component: 1 if prescribed
-  std::vector<double> _fext, _fext_old, _reac, _fold, _rot;
+  std::vector<std::int32_t> _held_dofs; // 3 i + k of held translations
+  std::vector<double> _fext, _fext_old, _reac, _fold, _vold, _part;
+  ForceScratch _scratch;
   double _dt, _c, _t = 0.0;
   std::int64_t _steps = 0;
   bool _in_step = false;
   DemEnergy _e;
+  DemTimings _time;
 };
 
 } // namespace dembridge::dem
