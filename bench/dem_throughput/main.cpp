@@ -133,7 +133,7 @@ int main(int argc, char** argv)
                               + bytes(p.t) + bytes(p.r) + bytes(p.m) + bytes(p.inertia)
                               + bytes(p.weight) + bytes(links.a) + bytes(links.b)
                               + bytes(links.d0) + bytes(links.kn) + bytes(links.ks)
-                              + bytes(links.s_int) + bytes(links.fs) + bytes(links.n)
+                              + bytes(links.fs) + bytes(links.n)
                               + bytes(links.delta_max) + bytes(links.state) + bytes(links.weight)
                               + solver.bytes(); // neighbour list and force-loop scratch
       const double bpl = double(mem) / links.size();

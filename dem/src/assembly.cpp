@@ -132,7 +132,6 @@ Links create_links(const Particles& p, double lambda, const Material& mat)
                      l.d0.push_back(d);
                      l.kn.push_back(law.kn);
                      l.ks.push_back(law.ks);
-                     l.s_int.push_back(law.s_int);
                      for (int k = 0; k < 3; ++k)
                        l.n.push_back((p.x[3 * j + k] - p.x[3 * i + k]) / d);
                    });

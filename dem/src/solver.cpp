@@ -46,21 +46,6 @@ inline void thread_range(std::size_t np, int t, int nt, std::size_t& lo, std::si
 /// spheres; `reset` zeroes them first.
 /// Values per item that a sweep prepares for a whole sphere at once.
 constexpr int prepared = 8;
-/// The sweep's working copy of the spheres, one 128-byte block each:
-/// position (3), radius, rotation over the step (9); and its accumulators,
-/// one 64-byte block each: force (3), torque factor sum (3). A link then
-/// touches three cache lines of its other sphere instead of six.
-constexpr std::size_t block = 16, acc_stride = 8;
-
-/// 64-byte aligned storage for n doubles inside v.
-inline double* aligned(std::vector<double>& v, std::size_t n)
-{
-  if (v.size() < n + 8)
-    v.assign(n + 8, 0.0);
-  const auto addr = reinterpret_cast<std::uintptr_t>(v.data());
-  return v.data() + ((64 - addr % 64) % 64) / sizeof(double);
-}
-
 /// Unit normal a -> b and branch length of the items [k0, k1) of sphere i,
 /// into g[0..3] of each item's `prepared` values: done for a sphere's items
 /// together, so that the square roots and divisions of successive items
@@ -68,10 +53,10 @@ inline double* aligned(std::vector<double>& v, std::size_t n)
 inline void branches(const double* x, std::size_t i, std::span<const std::int32_t> b,
                      std::int32_t k0, std::int32_t k1, double* g)
 {
-  const double* xi = x + block * i;
+  const double* xi = x + 3 * i;
   for (std::int32_t k = k0; k < k1; ++k)
   {
-    const double* xj = x + block * b[k];
+    const double* xj = x + 3 * b[k];
     double* gk = g + prepared * (k - k0);
     gk[0] = xj[0] - xi[0];
     gk[1] = xj[1] - xi[1];
@@ -94,7 +79,7 @@ inline void branches(const double* x, std::size_t i, std::span<const std::int32_
 /// i (reading state only); compute(i, k, g_k, out) then does item k.
 template <typename Prepare, typename Compute>
 void sweep(SweepIndex& ix, std::span<const std::int32_t> b, std::size_t np, bool reset,
-           double* acc, Prepare&& prepare, Compute&& compute)
+           double* f, double* q, Prepare&& prepare, Compute&& compute)
 {
   const int t = omp_get_thread_num();
   std::size_t lo, hi;
@@ -113,7 +98,10 @@ void sweep(SweepIndex& ix, std::span<const std::int32_t> b, std::size_t np, bool
         compute(i, k, &g[prepared * (k - k0)], &ix.out[6 * slot++]);
   }
   if (reset)
-    std::fill(acc + acc_stride * lo, acc + acc_stride * hi, 0.0);
+  {
+    std::fill(f + 3 * lo, f + 3 * hi, 0.0);
+    std::fill(q + 3 * lo, q + 3 * hi, 0.0);
+  }
 #pragma omp barrier
   // the cross items into this thread's spheres come first in item order
   for (std::size_t j = lo; j < hi; ++j)
@@ -122,8 +110,8 @@ void sweep(SweepIndex& ix, std::span<const std::int32_t> b, std::size_t np, bool
       const double* o = &ix.out[6 * ix.in[e]];
       for (int c = 0; c < 3; ++c)
       {
-        acc[acc_stride * j + c] += o[c];
-        acc[acc_stride * j + 3 + c] += o[3 + c];
+        f[3 * j + c] += o[c];
+        q[3 * j + c] += o[3 + c];
       }
     }
   slot = ix.cross_first[t];
@@ -144,8 +132,8 @@ void sweep(SweepIndex& ix, std::span<const std::int32_t> b, std::size_t np, bool
       else if (compute(i, k, &g[prepared * (k - k0)], local))
         for (int c = 0; c < 3; ++c)
         {
-          acc[acc_stride * j + c] += local[c];
-          acc[acc_stride * j + 3 + c] += local[3 + c];
+          f[3 * j + c] += local[c];
+          q[3 * j + c] += local[3 + c];
         }
       else
         continue;
@@ -157,8 +145,8 @@ void sweep(SweepIndex& ix, std::span<const std::int32_t> b, std::size_t np, bool
     }
     for (int c = 0; c < 3; ++c)
     {
-      acc[acc_stride * i + c] += fi[c];
-      acc[acc_stride * i + 3 + c] += qi[c];
+      f[3 * i + c] += fi[c];
+      q[3 * i + c] += qi[c];
     }
   }
 }
@@ -244,7 +232,7 @@ std::size_t SweepIndex::bytes() const
 
 std::size_t ForceScratch::bytes() const
 {
-  std::size_t s = (spheres.capacity() + acc.capacity() + pair_slip.capacity()) * sizeof(double) + links.bytes()
+  std::size_t s = (rot.capacity() + pair_slip.capacity()) * sizeof(double) + links.bytes()
                   + pairs.bytes() + broken_ids.capacity() * sizeof(std::int32_t)
                   + broken_all.capacity() * sizeof(broken_all[0]);
   for (const auto& b : broken)
@@ -272,8 +260,10 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     s.links_size = l.size();
     s.pairs_version = SIZE_MAX;
   }
-  double* sb = aligned(s.spheres, block * np);
-  double* acc = aligned(s.acc, acc_stride * np);
+  s.rot.resize(9 * np);
+  const double* x = p.x.data();
+  double* f = p.f.data();
+  double* t = p.t.data();
   if (s.broken.size() < static_cast<std::size_t>(nt))
     s.broken.resize(nt);
   for (auto& b : s.broken)
@@ -290,17 +280,16 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   auto link_prepare = [&](std::size_t i, std::int32_t k0, std::int32_t k1, double* g)
                           __attribute__((always_inline))
   {
-    branches(sb, i, l.b, k0, k1, g);
-    const Mat3 ra = load3x3(sb + block * i + 4);
+    branches(x, i, l.b, k0, k1, g);
+    const Mat3 ra = load3x3(&s.rot[9 * i]);
     for (std::int32_t k = k0; k < k1; ++k)
     {
       double* gk = g + prepared * (k - k0);
       const std::int32_t j = l.b[k];
-      const double inv_rs = 1.0 / (sb[block * i + 3] + sb[block * j + 3]);
+      const double inv_rs = 1.0 / (rad[i] + rad[j]);
       const Vec3 tr = trial_shear({l.fs[3 * k], l.fs[3 * k + 1], l.fs[3 * k + 2]},
                                   {l.n[3 * k], l.n[3 * k + 1], l.n[3 * k + 2]}, {gk[0], gk[1], gk[2]},
-                                  pair_rotation(ra, load3x3(sb + block * j + 4),
-                                                sb[block * i + 3] * inv_rs),
+                                  pair_rotation(ra, load3x3(&s.rot[9 * j]), rad[i] * inv_rs),
                                   l.ks[k] * gk[3]);
       gk[7] = inv_rs;
       gk[4] = tr[0];
@@ -320,7 +309,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     LinkLaw law = base;
     law.kn = l.kn[k];
     law.ks = l.ks[k];
-    law.s_int = l.s_int[k];
+    law.s_int = link_surface(p, l, k);
     const double delta = D - l.d0[k];
     const NormalForce nf = link_normal_force(delta, l.delta_max[k], law);
     double* fs_old = &l.fs[3 * k];
@@ -365,17 +354,14 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     }
     else
     {
-      // each sphere's block: position, radius, rotation over the step
+      // each sphere's rotation over the step
 #pragma omp for schedule(static)
       for (std::size_t i = 0; i < np; ++i)
       {
         const Mat3 r = rotation_matrix({p.w[3 * i] * dt, p.w[3 * i + 1] * dt, p.w[3 * i + 2] * dt});
-        double* bi = sb + block * i;
-        std::copy(&p.x[3 * i], &p.x[3 * i] + 3, bi);
-        bi[3] = rad[i];
-        std::copy(r.begin(), r.end(), bi + 4);
+        std::copy(r.begin(), r.end(), s.rot.begin() + 9 * i);
       }
-      sweep(s.links, l.b, np, true, acc, link_prepare, link_force);
+      sweep(s.links, l.b, np, true, f, t, link_prepare, link_force);
     }
   }
   if (short_team)
@@ -428,8 +414,8 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     const double* n_old = nl.touching[q] ? &nl.n[3 * q] : n;
     const Vec3 fs_prev = nl.touching[q] ? Vec3{fs_old[0], fs_old[1], fs_old[2]} : Vec3{0, 0, 0};
     const Vec3 trial = trial_shear(fs_prev, {n_old[0], n_old[1], n_old[2]}, {n[0], n[1], n[2]},
-                                   pair_rotation(load3x3(sb + block * i + 4),
-                                                 load3x3(sb + block * j + 4), rad[i] / rs),
+                                   pair_rotation(load3x3(&s.rot[9 * i]), load3x3(&s.rot[9 * j]),
+                                                 rad[i] / rs),
                                    law.ks * D);
     const ShearForce sf = contact_shear_cap(trial, fn, law);
     const double wq = weighted_spheres ? 0.5 * (p.weight[i] + p.weight[j]) : 1.0;
@@ -448,19 +434,16 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   {
     if (omp_get_num_threads() == nt)
     {
-      sweep(s.pairs, nl.b, np, false, acc,
+      sweep(s.pairs, nl.b, np, false, f, t,
             [&](std::size_t i, std::int32_t k0, std::int32_t k1, double* g)
-            { branches(sb, i, nl.b, k0, k1, g); },
+            { branches(x, i, nl.b, k0, k1, g); },
             contact_force);
-      // forces; torques: each sphere's radius times its summed torque factors
+      // torques: each sphere's radius times its summed torque factors
       std::size_t lo, hi;
       thread_range(np, omp_get_thread_num(), nt, lo, hi);
       for (std::size_t i = lo; i < hi; ++i)
         for (int k = 0; k < 3; ++k)
-        {
-          p.f[3 * i + k] = acc[acc_stride * i + k];
-          p.t[3 * i + k] = rad[i] * acc[acc_stride * i + 3 + k];
-        }
+          t[3 * i + k] *= rad[i];
     }
     else
     {
@@ -491,7 +474,7 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
     LinkLaw law = base;
     law.kn = l.kn[k];
     law.ks = l.ks[k];
-    law.s_int = l.s_int[k];
+    law.s_int = link_surface(p, l, k);
     const double delta = std::sqrt(dot3(d, d)) - l.d0[k];
     const double fn = link_normal_force(delta, l.delta_max[k], law).fn;
     const double wk = l.weight.empty() ? 1.0 : l.weight[k];
@@ -520,7 +503,7 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
   return e;
 }
 
-double softening_energy(const Links& l, const Material& mat)
+double softening_energy(const Particles& p, const Links& l, const Material& mat)
 {
   double e = 0.0;
   LinkLaw law = mat.law(1.0, 1.0, 1.0);
@@ -530,7 +513,7 @@ double softening_energy(const Links& l, const Material& mat)
       continue;
     law.kn = l.kn[k];
     law.ks = l.ks[k];
-    law.s_int = l.s_int[k];
+    law.s_int = link_surface(p, l, k);
     e += (l.weight.empty() ? 1.0 : l.weight[k]) * softening_dissipation(l.delta_max[k], law);
   }
   return e;
@@ -618,9 +601,6 @@ DemSolver::DemSolver(Particles& p, Links& l, const Material& mat, double dt, dou
     throw std::runtime_error("time step " + std::to_string(dt) + " s: must be > 0");
   set_damping(damping);
   _held.assign(6 * p.size(), 0);
-  _fext.assign(3 * p.size(), 0.0);
-  _fext_old.assign(3 * p.size(), 0.0);
-  _reac.assign(3 * p.size(), 0.0);
 }
 
 std::size_t DemSolver::bytes() const
@@ -647,7 +627,7 @@ void DemSolver::update_held()
         _held_dofs.push_back(static_cast<std::int32_t>(3 * i + k));
   _fold.assign(_held_dofs.size(), 0.0);
   _vold.assign(_held_dofs.size(), 0.0);
-  std::fill(_reac.begin(), _reac.end(), 0.0);
+  _reac.assign(_held_dofs.size(), 0.0);
 }
 
 void DemSolver::set_damping(double c)
@@ -699,7 +679,13 @@ void DemSolver::add_force(ParticleForce f)
     throw std::runtime_error("force '" + f.name + "' has no sphere");
   if (!f.value)
     throw std::runtime_error("force '" + f.name + "' needs a history");
+  for (auto i : f.ids)
+    if (i < 0 || static_cast<std::size_t>(i) >= _p.size())
+      throw std::runtime_error("force '" + f.name + "': sphere index out of range");
   _forces.push_back(std::move(f));
+  // external force arrays only once there is an external force
+  _fext.resize(3 * _p.size(), 0.0);
+  _fext_old.resize(3 * _p.size(), 0.0);
 }
 
 namespace
@@ -721,7 +707,8 @@ void DemSolver::start()
 {
   _nl.update(_p.x, _p.r, _l);
   compute_forces(_p, _l, _nl, _mat, 0.0, _counters, _scratch);
-  external(_forces, _t, _fext);
+  if (!_forces.empty())
+    external(_forces, _t, _fext);
   _e = DemEnergy{};
   const DemEnergy e = energy();
   _e.initial = e.kinetic + e.elastic;
@@ -731,6 +718,7 @@ void DemSolver::kick(double h)
 {
   const std::size_t n = _p.size();
   const double ch = _c * h;
+  const double* fext = _fext.empty() ? nullptr : _fext.data();
 #pragma omp parallel for schedule(static) num_threads(impl::threads_for(n))
   for (std::size_t i = 0; i < n; ++i)
   {
@@ -738,7 +726,7 @@ void DemSolver::kick(double h)
     for (int k = 0; k < 3; ++k)
     {
       if (!_held[6 * i + k])
-        _p.v[3 * i + k] += (_p.f[3 * i + k] + _fext[3 * i + k]) * im - ch * _p.v[3 * i + k];
+        _p.v[3 * i + k] += (_p.f[3 * i + k] + (fext ? fext[3 * i + k] : 0.0)) * im - ch * _p.v[3 * i + k];
       if (!_held[6 * i + 3 + k])
         _p.w[3 * i + k] += _p.t[3 * i + k] * iI - ch * _p.w[3 * i + k];
     }
@@ -759,7 +747,7 @@ void DemSolver::begin_step()
   for (std::size_t q = 0; q < _held_dofs.size(); ++q)
   {
     const std::int32_t d = _held_dofs[q];
-    _fold[q] = _p.f[d] + _fext[d];
+    _fold[q] = _p.f[d] + (_fext.empty() ? 0.0 : _fext[d]);
     _vold[q] = _p.v[d];
   }
   kick(0.5 * dt);
@@ -841,11 +829,11 @@ void DemSolver::end_step()
     const std::int32_t d = _held_dofs[q];
     const std::size_t i = static_cast<std::size_t>(d) / 3;
     const double vh = _p.v[d];
-    const double F_new = _p.f[d] + _fext[d] - _c * _p.m[i] * vh;
+    const double F_new = _p.f[d] + (_fext.empty() ? 0.0 : _fext[d]) - _c * _p.m[i] * vh;
     const double F_old = _fold[q] - _c * _p.m[i] * vh;
     const double R = _p.m[i] * (vh - _vold[q]) / dt - 0.5 * (F_old + F_new);
     w_presc += dt * vh * R;
-    _reac[d] = R;
+    _reac[q] = R;
   }
   kick(0.5 * dt);
   for (const auto& m : _motions)
@@ -886,7 +874,7 @@ DemEnergy DemSolver::energy() const
     e.kinetic += 0.5 * _p.m[i] * dot3(&_p.v[3 * i], &_p.v[3 * i])
                  + 0.5 * _p.inertia[i] * dot3(&_p.w[3 * i], &_p.w[3 * i]);
   e.elastic = elastic_energy(_p, _l, _nl, _mat);
-  e.softening = softening_energy(_l, _mat);
+  e.softening = softening_energy(_p, _l, _mat);
   e.breakage = _counters.breakage;
   e.friction = _counters.friction;
   return e;
@@ -900,7 +888,11 @@ std::array<double, 3> DemSolver::reaction(const std::string& name) const
       std::array<double, 3> r{0, 0, 0};
       for (auto i : m.ids)
         for (int k = 0; k < 3; ++k)
-          r[k] += _reac[3 * i + k];
+        {
+          const auto it = std::lower_bound(_held_dofs.begin(), _held_dofs.end(), 3 * i + k);
+          if (it != _held_dofs.end() && *it == 3 * i + k)
+            r[k] += _reac[it - _held_dofs.begin()];
+        }
       return r;
     }
   throw std::runtime_error("no boundary condition named '" + name + "'");

@@ -54,8 +54,7 @@ struct SweepIndex
 /// when the links, the neighbour pairs or the thread count change.
 struct ForceScratch
 {
-  std::vector<double> spheres;   ///< per sphere: position, radius, rotation over the step
-  std::vector<double> acc;       ///< per sphere: force and torque-factor sums
+  std::vector<double> rot;       ///< each sphere's rotation over the step, 9 per sphere
   SweepIndex links, pairs;
   std::vector<double> pair_slip; ///< per pair: energy dissipated by friction in the step [J]
   std::vector<std::vector<std::pair<std::int32_t, double>>> broken; ///< per thread
@@ -89,7 +88,7 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
                       const Material& mat);
 
 /// Energy dissipated by tensile softening of all links [J].
-double softening_energy(const Links& l, const Material& mat);
+double softening_energy(const Particles& p, const Links& l, const Material& mat);
 
 /// Action of the linearised stiffness of the intact links about the current
 /// positions, f = K u (the links' weights included; contacts left out):
@@ -207,7 +206,8 @@ private:
   std::vector<ParticleMotion> _motions;
   std::vector<ParticleForce> _forces;
   std::vector<std::uint8_t> _held;      // per particle and component: 1 if prescribed
-  std::vector<std::int32_t> _held_dofs; // 3 i + k of held translations
+  std::vector<std::int32_t> _held_dofs; // 3 i + k of held translations (sorted); _fold,
+                                        // _vold, _reac: one value per held dof
   std::vector<double> _fext, _fext_old, _reac, _fold, _vold, _part;
   ForceScratch _scratch;
   double _dt, _c, _t = 0.0;
