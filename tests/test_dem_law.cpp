@@ -137,3 +137,35 @@ TEST_CASE("shear kinematics: rigid rotations give no shear, the force turns with
   const Vec3 u = shear_increment(n0, n0, rotation_matrix({0, 0, 1e-6}), I, D, 0.5);
   CHECK(std::abs(u[1] + 0.5 * D * 1e-6) < 1e-9 * D * 1e-6);
 }
+
+TEST_CASE("trial shear in one product equals the stored force turned minus K_s times the "
+          "increment", "[dem][law]")
+{
+  // The force loop uses trial_shear = P Rp (fs + K_s D n_old); the law's two
+  // steps are rotate_shear (P Rp fs) and shear_increment (-D P Rp n_old).
+  // Both are linear in Rp and P, so the results agree to round-off: terms
+  // of size |fs| ~ K_s D |n| ~ 1e2 N summed in a different order, a few ulps
+  // of 1e2 N, i.e. ~1e-13 N; bound 1e-12 relative to the largest term.
+  const double ks = 4e6, D = 2.1e-3, fa = 0.4;
+  for (int c = 0; c < 20; ++c)
+  {
+    const double s = 0.37 * c; // deterministic spread of directions and angles
+    const Vec3 th_a{1e-3 * std::sin(s), 2e-3 * std::cos(1.3 * s), -1e-3 * std::sin(0.7 * s)};
+    const Vec3 th_b{0.3 * std::cos(s), -0.2 * std::sin(2.1 * s), 0.1};
+    const Mat3 ra = rotation_matrix(th_a), rb = rotation_matrix(th_b);
+    Vec3 n_old{std::cos(s), std::sin(s), 0.3}, n_new{std::cos(s + 0.01), std::sin(s + 0.01), 0.28};
+    const double lo = norm(n_old), ln = norm(n_new);
+    for (int k = 0; k < 3; ++k)
+    {
+      n_old[k] /= lo;
+      n_new[k] /= ln;
+    }
+    const Vec3 fs{30.0 * std::cos(2 * s), -20.0, 10.0 * std::sin(s)};
+    const Vec3 turned = rotate_shear(fs, ra, rb, fa, n_new);
+    const Vec3 du = shear_increment(n_old, n_new, ra, rb, D, fa);
+    const Vec3 fused = trial_shear(fs, n_old, n_new, pair_rotation(ra, rb, fa), ks * D);
+    const double scale = std::max(norm(fs), ks * D);
+    for (int k = 0; k < 3; ++k)
+      CHECK(std::abs(fused[k] - (turned[k] - ks * du[k])) < 1e-12 * scale);
+  }
+}

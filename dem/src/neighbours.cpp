@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <omp.h>
 
+#include "pairs.h"
 #include "threads.h"
 #include <cmath>
 #include <stdexcept>
@@ -94,16 +95,7 @@ bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
   const double rmax = np ? *std::max_element(r.begin(), r.end()) : 0.0;
   CellGrid grid(x, 2.0 * rmax + _skin);
   // links sorted by (a, b): those of sphere i as a are a contiguous range
-  std::vector<std::int32_t> first(np + 1, 0);
-  for (std::size_t k = 0; k < links.size(); ++k)
-  {
-    if (k > 0 && (links.a[k] < links.a[k - 1]
-                  || (links.a[k] == links.a[k - 1] && links.b[k] <= links.b[k - 1])))
-      throw std::runtime_error("neighbour list: links must be sorted by (a, b) without repeats");
-    ++first[links.a[k] + 1];
-  }
-  for (std::size_t i = 0; i < np; ++i)
-    first[i + 1] += first[i];
+  const std::vector<std::int32_t> first = impl::first_by_a(np, links.a, links.b, "neighbour list: links");
   // each thread searches a contiguous block of spheres (static schedule), so
   // the blocks joined in thread order give the same list for any thread count
   struct Found

@@ -4,9 +4,9 @@
 #include <cstdint>
 #include <omp.h>
 
+#include "pairs.h"
 #include "threads.h"
 #include <cmath>
-#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -177,19 +177,7 @@ inline void pair_output(double* out, const double* n, double fn, const Vec3& fs,
 void SweepIndex::build(std::size_t np, std::span<const std::int32_t> a,
                        std::span<const std::int32_t> b, int nt)
 {
-  first.assign(np + 1, 0);
-  for (std::size_t k = 0; k < a.size(); ++k)
-  {
-    if (k > 0 && (a[k] < a[k - 1] || (a[k] == a[k - 1] && b[k] <= b[k - 1])))
-      throw std::runtime_error("force loop: links and pairs must be sorted by (a, b)");
-    if (a[k] < 0 || b[k] <= a[k] || static_cast<std::size_t>(b[k]) >= np)
-      throw std::runtime_error("force loop: pair " + std::to_string(k) + " (" + std::to_string(a[k])
-                               + ", " + std::to_string(b[k]) + ") needs 0 <= a < b < "
-                               + std::to_string(np));
-    ++first[a[k] + 1];
-  }
-  for (std::size_t i = 0; i < np; ++i)
-    first[i + 1] += first[i];
+  first = impl::first_by_a(np, a, b, "force loop: links and pairs");
   threads = nt;
   cross_first.assign(nt + 1, 0);
   in_first.assign(np + 1, 0);
@@ -225,9 +213,12 @@ std::size_t min_spheres_per_thread_team() { return impl::min_items_per_team(); }
 
 std::size_t SweepIndex::bytes() const
 {
-  return (first.capacity() + cross_first.capacity() + in_first.capacity() + in.capacity())
+  std::size_t s = (first.capacity() + cross_first.capacity() + in_first.capacity() + in.capacity())
              * sizeof(std::int32_t)
-         + out.capacity() * sizeof(double) + geometry.size() * geometry[0].capacity() * sizeof(double);
+         + out.capacity() * sizeof(double);
+  for (const auto& g : geometry)
+    s += g.capacity() * sizeof(double);
+  return s;
 }
 
 std::size_t ForceScratch::bytes() const
@@ -284,6 +275,8 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     const Mat3 ra = load3x3(&s.rot[9 * i]);
     for (std::int32_t k = k0; k < k1; ++k)
     {
+      if (l.state[k] != LinkState::intact)
+        continue;
       double* gk = g + prepared * (k - k0);
       const std::int32_t j = l.b[k];
       const double inv_rs = 1.0 / (rad[i] + rad[j]);
@@ -388,17 +381,15 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   }
 
   // contacts between spheres without an intact link
-  const double pi = std::numbers::pi;
   auto contact_force = [&](std::size_t i, std::int32_t q, const double* n, double* out)
                            __attribute__((always_inline)) -> bool
   {
     s.pair_slip[q] = 0.0;
-    const std::int32_t lk = nl.link[q];
     const std::int32_t j = nl.b[q];
     const double D = n[3];
     const double rs = rad[i] + rad[j];
     double* fs_old = &nl.fs[3 * q];
-    if ((lk >= 0 && l.state[lk] == LinkState::intact) || D >= rs)
+    if (D >= rs) // (a listed pair never has an intact link: NeighbourList)
     {
       nl.touching[q] = 0;
       std::fill(fs_old, fs_old + 3, 0.0);
@@ -406,8 +397,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       return false;
     }
     LinkLaw law = base;
-    const double rm = std::min(rad[i], rad[j]);
-    law.s_int = pi * rm * rm; // as interaction_surface
+    law.s_int = pair_surface(rad[i], rad[j]);
     law.kn = mat.youngs_modulus * law.s_int / rs * cf.cn;
     law.ks = law.kn * cf.cs;
     const double fn = contact_normal_force(D, rs, law.kn);
@@ -484,9 +474,6 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
   for (std::size_t q = 0; q < nl.size(); ++q)
   {
     if (!nl.touching[q])
-      continue;
-    const std::int32_t lk = nl.link[q];
-    if (lk >= 0 && l.state[lk] == LinkState::intact)
       continue;
     const std::int32_t i = nl.a[q], j = nl.b[q];
     double d[3];

@@ -83,12 +83,18 @@ struct Links
   std::size_t count(LinkState s) const;
 };
 
-/// Interaction surface S_int = pi min(R_a, R_b)^2 of link k [m^2] (not
-/// stored: the radii give it, 8 bytes less per link).
+/// Interaction surface S_int = pi min(R_a, R_b)^2 of two valid radii [m^2]
+/// (interaction_surface without its checks, for the force loop).
+inline double pair_surface(double ra, double rb)
+{
+  const double r = std::min(ra, rb);
+  return std::numbers::pi * r * r;
+}
+
+/// S_int of link k (not stored: the radii give it, 8 bytes less per link).
 inline double link_surface(const Particles& p, const Links& l, std::size_t k)
 {
-  const double r = std::min(p.r[l.a[k]], p.r[l.b[k]]);
-  return std::numbers::pi * r * r;
+  return pair_surface(p.r[l.a[k]], p.r[l.b[k]]);
 }
 
 /// Links between every pair with D_init <= lambda (R_a + R_b), lambda >= 1,

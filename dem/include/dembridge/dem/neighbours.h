@@ -88,7 +88,7 @@ public:
   std::size_t bytes() const;
 
   std::vector<std::int32_t> a, b;  ///< pairs, a < b, sorted
-  std::vector<std::int32_t> link;  ///< link index of the pair, or -1
+  std::vector<std::int32_t> link;  ///< index of the pair's (broken) link, or -1; never an intact one
   std::vector<double> fs;          ///< contact shear force on b, (pairs, 3) [N]
   std::vector<double> n;           ///< contact normal at the last step, (pairs, 3)
   std::vector<std::uint8_t> touching; ///< 1 while the pair is in contact
