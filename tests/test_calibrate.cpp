@@ -42,7 +42,7 @@ TEST_CASE("full identification: strengths within 5 %, file read back by the demo
 {
   auto c = small();
   c.target.tensile_strength = 3.0e6;
-  c.target.compressive_strength = 25e6;
+  c.target.compressive_strength = 21e6;
   const auto dir = std::filesystem::temp_directory_path() / "dembridge_calibrate";
   std::filesystem::remove_all(dir);
   c.output_dir = dir.string();
@@ -52,7 +52,7 @@ TEST_CASE("full identification: strengths within 5 %, file read back by the demo
   CHECK(std::abs(a["youngs_modulus_pa"].get<double>() / 30e9 - 1.0) < 0.02);
   CHECK(std::abs(a["poisson_ratio"].get<double>() - 0.2) < 0.02);
   CHECK(std::abs(a["tensile_strength_pa"].get<double>() / 3.0e6 - 1.0) < 0.05);
-  CHECK(std::abs(a["compressive_strength_pa"].get<double>() / 25e6 - 1.0) < 0.05);
+  CHECK(std::abs(a["compressive_strength_pa"].get<double>() / 21e6 - 1.0) < 0.05);
   CHECK(std::filesystem::exists(dir / "tension" / "stress_strain.csv"));
   CHECK(std::filesystem::exists(dir / "compression" / "stress_strain.csv"));
   // the parameter file round trip, and the same packing gives the same result

@@ -34,7 +34,7 @@ struct Targets
   double youngs_modulus = 30e9;        ///< [Pa]
   double poisson_ratio = 0.2;          ///< [-]
   double tensile_strength = 3.0e6;     ///< sigma_t [Pa]
-  double compressive_strength = 25e6;  ///< sigma_c [Pa]
+  double compressive_strength = 21e6;  ///< sigma_c [Pa]
   double density = 2400.0;             ///< [kg/m^3]
 };
 

@@ -8,7 +8,7 @@
 //
 // Sample runs:
 //   build/bin/calibrate --output out/calibration --summary out/calibration.json
-//   build/bin/calibrate --tensile-strength 4e6 --compressive-strength 40e6 --mean-radius 0.003
+//   build/bin/calibrate --tensile-strength 4e6 --compressive-strength 28e6 --mean-radius 0.003
 //   build/bin/calibrate --elastic-only --poisson-ratio 0.18
 #include "identify.h"
 #include "support.h"
