@@ -67,7 +67,11 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
   if (!(t.poisson_ratio > 0.0 && t.poisson_ratio < 0.5))
     throw std::runtime_error("target Poisson's ratio " + std::to_string(t.poisson_ratio)
                              + ": must be in (0, 0.5) (equation [1] needs nu > 0 here)");
-  if (!cfg.elastic_only)
+  if (cfg.given_local_strengths && !(cfg.fixed.tensile > 0.0 && cfg.fixed.cohesion > 0.0))
+    throw std::runtime_error("given local strengths T = " + std::to_string(cfg.fixed.tensile)
+                             + " Pa and C0 = " + std::to_string(cfg.fixed.cohesion)
+                             + " Pa: both must be > 0");
+  if (!cfg.elastic_only && !cfg.given_local_strengths)
   {
     if (!(t.tensile_strength > 0.0) || !(t.compressive_strength > 0.0))
       throw std::runtime_error("target strengths must be > 0 Pa");
@@ -145,7 +149,12 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
   }
 
   IdentifyResult res;
-  if (!cfg.elastic_only)
+  if (cfg.given_local_strengths)
+  {
+    m.tensile = cfg.fixed.tensile;
+    m.cohesion = cfg.fixed.cohesion;
+  }
+  else if (!cfg.elastic_only)
   {
     // 3. C0/T for sigma_c/sigma_t, then the common scale for sigma_t
     const double ratio_target = t.compressive_strength / t.tensile_strength;
@@ -205,8 +214,11 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
   res.file.links_per_sphere = cfg.sample.links_per_sphere;
   res.file.lambda = res.compression["lambda"].get<double>();
   res.file.macroscopic = res.achieved;
-  res.file.calibration = {{"method", "demos/calibrate: bisection on alpha for nu, beta for E, "
-                                     "bisection on C0/T for sigma_c/sigma_t, rescale for sigma_t"},
+  res.file.calibration = {{"method", cfg.given_local_strengths
+                                         ? "demos/calibrate: bisection on alpha for nu, beta for E; "
+                                           "T and C0 given, sigma_t and sigma_c measured"
+                                         : "demos/calibrate: bisection on alpha for nu, beta for E, "
+                                           "bisection on C0/T for sigma_c/sigma_t, rescale for sigma_t"},
                           {"sample", {{"shape", cfg.sample.shape},
                                       {"diameter_m", cfg.sample.diameter},
                                       {"height_m", cfg.sample.height},

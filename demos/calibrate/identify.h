@@ -46,6 +46,10 @@ struct IdentifyConfig
   double tol_elastic = 0.005;    ///< relative on E, absolute on nu
   double tol_strength = 0.01;    ///< relative on sigma_c / sigma_t
   bool elastic_only = false;
+  /// The paper's way: T and C0 given (fixed.tensile, fixed.cohesion), only
+  /// alpha, beta, gamma identified; the strengths they give are measured
+  /// (the targets' sigma_t, sigma_c are ignored).
+  bool given_local_strengths = false;
   std::string output_dir;        ///< final tests write DIR/tension and DIR/compression
   bool quiet = false;
 };

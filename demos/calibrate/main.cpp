@@ -51,6 +51,16 @@ int main(int argc, char** argv)
   app.add_option("--tolerance-strength", c.tol_strength, "relative tolerance on sigma_c/sigma_t")
       ->capture_default_str();
   app.add_flag("--elastic-only", c.elastic_only, "identify alpha, beta, gamma only");
+  double local_t = 0.0, local_c0 = 0.0;
+  auto* opt_t = app.add_option("--local-tensile", local_t,
+                               "give the local tensile strength T [Pa] instead of identifying it "
+                               "(with --local-cohesion; the paper's concrete: 3.3e6)");
+  auto* opt_c = app.add_option("--local-cohesion", local_c0,
+                               "give the local cohesion C0 [Pa] (with --local-tensile; the "
+                               "paper's concrete: 4.4e6); sigma_t and sigma_c are then measured");
+  opt_t->needs(opt_c);
+  opt_c->needs(opt_t);
+  opt_t->excludes("--elastic-only");
   app.add_option("--plot", plot, "1: write PNG plots with matplotlib, 0: no")->capture_default_str();
   app.add_option("--output", output, "output folder (material.json, curves, plots)");
   app.add_option("--summary", summary, "write target, achieved and parameters as JSON");
@@ -59,6 +69,12 @@ int main(int argc, char** argv)
   return demo::run_guarded(argc, argv, [&]
   {
     demo::echo_options(app);
+    if (*opt_t)
+    {
+      c.given_local_strengths = true;
+      c.fixed.tensile = local_t;
+      c.fixed.cohesion = local_c0;
+    }
     demo::Stopwatch clock;
     c.output_dir = output;
     std::cout << "simulated tests:" << std::endl;
@@ -66,7 +82,7 @@ int main(int argc, char** argv)
     const auto& m = r.file.material;
     nlohmann::json out;
     out["target"] = {{"youngs_modulus_pa", t.youngs_modulus}, {"poisson_ratio", t.poisson_ratio}};
-    if (!c.elastic_only)
+    if (!c.elastic_only && !c.given_local_strengths)
     {
       out["target"]["tensile_strength_pa"] = t.tensile_strength;
       out["target"]["compressive_strength_pa"] = t.compressive_strength;
