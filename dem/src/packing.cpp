@@ -51,58 +51,18 @@ struct Ball
 };
 
 /// Full neighbour lists (both directions) in CSR form: every pair closer
-/// than r_i + r_j + reach. The spheres are binned in cells of 2 Rmax + reach
-/// and copied in cell order, so the 27 cells around a sphere are read as
-/// contiguous runs; each thread fills a contiguous block of spheres.
+/// than r_i + r_j + reach. The spheres are copied in the cell grid's order,
+/// so the 27 cells around a sphere are read as 9 contiguous runs; each
+/// thread fills a contiguous block of spheres.
 Csr neighbours(const std::vector<double>& x, const std::vector<double>& r, double reach)
 {
   const std::size_t n = r.size();
   const double rmax = *std::max_element(r.begin(), r.end());
-  double lo[3], hi[3];
-  for (int k = 0; k < 3; ++k)
-    lo[k] = hi[k] = x[k];
-  for (std::size_t i = 0; i < n; ++i)
-    for (int k = 0; k < 3; ++k)
-    {
-      lo[k] = std::min(lo[k], x[3 * i + k]);
-      hi[k] = std::max(hi[k], x[3 * i + k]);
-    }
-  double h = 2.0 * rmax + reach;
-  int m[3];
-  auto cells = [&]
-  {
-    for (int k = 0; k < 3; ++k)
-      m[k] = std::max(1, static_cast<int>((hi[k] - lo[k]) / h) + 1);
-    return std::size_t(m[0]) * m[1] * m[2];
-  };
-  while (cells() > 4 * n + 64) // very spread-out sets: cells stay >= the reach
-    h *= 1.26;
-  const std::size_t nc = cells();
-  auto cell_of = [&](const double* p, int* c)
-  {
-    for (int k = 0; k < 3; ++k)
-      c[k] = std::min(m[k] - 1, std::max(0, static_cast<int>((p[k] - lo[k]) / h)));
-  };
-  std::vector<std::int32_t> start(nc + 1, 0), id(n), index(n);
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    int c[3];
-    cell_of(&x[3 * i], c);
-    id[i] = static_cast<std::int32_t>((std::size_t(c[0]) * m[1] + c[1]) * m[2] + c[2]);
-    ++start[id[i] + 1];
-  }
-  for (std::size_t c = 0; c < nc; ++c)
-    start[c + 1] += start[c];
+  const CellGrid grid(x, 2.0 * rmax + reach);
+  const std::vector<std::int32_t>& index = grid.items();
   std::vector<Ball> sorted(n);
-  {
-    std::vector<std::int32_t> next(start.begin(), start.end() - 1);
-    for (std::size_t i = 0; i < n; ++i)
-    {
-      const std::int32_t k = next[id[i]]++;
-      sorted[k] = {x[3 * i], x[3 * i + 1], x[3 * i + 2], r[i]};
-      index[k] = static_cast<std::int32_t>(i);
-    }
-  }
+  for (std::size_t k = 0; k < n; ++k)
+    sorted[k] = {x[3 * index[k]], x[3 * index[k] + 1], x[3 * index[k] + 2], r[index[k]]};
   Csr c;
   c.start.assign(n + 1, 0);
   std::vector<std::vector<std::int32_t>> chunk;
@@ -116,30 +76,26 @@ Csr neighbours(const std::vector<double>& x, const std::vector<double>& r, doubl
     for (std::size_t i = 0; i < n; ++i)
     {
       const std::size_t first = used;
-      int ci[3];
-      cell_of(&x[3 * i], ci);
       const Ball bi{x[3 * i], x[3 * i + 1], x[3 * i + 2], r[i]};
-      for (int a = std::max(ci[0] - 1, 0); a <= std::min(ci[0] + 1, m[0] - 1); ++a)
-        for (int b = std::max(ci[1] - 1, 0); b <= std::min(ci[1] + 1, m[1] - 1); ++b)
-        {
-          // the three cells along z are contiguous in the sorted copy
-          const std::size_t row = (std::size_t(a) * m[1] + b) * m[2];
-          const std::int32_t k0 = start[row + std::max(ci[2] - 1, 0)],
-                             k1 = start[row + std::min(ci[2] + 1, m[2] - 1) + 1];
-          if (buf.size() < used + (k1 - k0))
-            buf.resize(2 * (used + (k1 - k0)));
-          std::int32_t* out = buf.data() + used;
-          std::size_t kept = 0;
-          for (std::int32_t k = k0; k < k1; ++k) // branch-free: write, keep if near
+      grid.for_each_run_near(
+          &x[3 * i],
+          [&](std::int32_t k0, std::int32_t k1)
           {
-            const Ball& bj = sorted[k];
-            const double dx = bj.x - bi.x, dy = bj.y - bi.y, dz = bj.z - bi.z;
-            const double lim = bi.r + bj.r + reach;
-            out[kept] = index[k];
-            kept += (dx * dx + dy * dy + dz * dz < lim * lim) & (index[k] != static_cast<std::int32_t>(i));
-          }
-          used += kept;
-        }
+            if (buf.size() < used + (k1 - k0))
+              buf.resize(2 * (used + (k1 - k0)));
+            std::int32_t* out = buf.data() + used;
+            std::size_t kept = 0;
+            for (std::int32_t k = k0; k < k1; ++k) // branch-free: write, keep if near
+            {
+              const Ball& bj = sorted[k];
+              const double dx = bj.x - bi.x, dy = bj.y - bi.y, dz = bj.z - bi.z;
+              const double lim = bi.r + bj.r + reach;
+              out[kept] = index[k];
+              kept += (dx * dx + dy * dy + dz * dz < lim * lim)
+                      & (index[k] != static_cast<std::int32_t>(i));
+            }
+            used += kept;
+          });
       c.start[i + 1] = static_cast<std::int32_t>(used - first);
     }
     buf.resize(used);

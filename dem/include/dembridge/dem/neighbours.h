@@ -21,22 +21,36 @@ class CellGrid
 public:
   /// @param x centres (n, 3); @param cell cell edge [m] (>= the search range)
   CellGrid(std::span<const double> x, double cell);
-  /// Calls fn(j) for every particle j in the 27 cells around point p.
+  /// Calls fn(k0, k1) for the 9 runs [k0, k1) of items() that hold the 27
+  /// cells around point p (cells are numbered z fastest, so the three cells
+  /// along z of a column are one run).
   template <typename Fn>
-  void for_each_near(const double* p, Fn&& fn) const
+  void for_each_run_near(const double* p, Fn&& fn) const
   {
     int c[3];
     for (int k = 0; k < 3; ++k)
       c[k] = cell_of(p[k], k);
+    const int z0 = std::max(c[2] - 1, 0), z1 = std::min(c[2] + 1, _n[2] - 1);
     for (int i = std::max(c[0] - 1, 0); i <= std::min(c[0] + 1, _n[0] - 1); ++i)
       for (int j = std::max(c[1] - 1, 0); j <= std::min(c[1] + 1, _n[1] - 1); ++j)
-        for (int k = std::max(c[2] - 1, 0); k <= std::min(c[2] + 1, _n[2] - 1); ++k)
-        {
-          const std::size_t id = (std::size_t(i) * _n[1] + j) * _n[2] + k;
-          for (std::int32_t q = _start[id]; q < _start[id + 1]; ++q)
-            fn(_items[q]);
-        }
+      {
+        const std::size_t row = (std::size_t(i) * _n[1] + j) * _n[2];
+        fn(_start[row + z0], _start[row + z1 + 1]);
+      }
   }
+  /// Calls fn(j) for every particle j in the 27 cells around point p.
+  template <typename Fn>
+  void for_each_near(const double* p, Fn&& fn) const
+  {
+    for_each_run_near(p,
+                      [&](std::int32_t k0, std::int32_t k1)
+                      {
+                        for (std::int32_t q = k0; q < k1; ++q)
+                          fn(_items[q]);
+                      });
+  }
+  /// The particles in cell order.
+  const std::vector<std::int32_t>& items() const { return _items; }
 
   /// Calls fn(j, d2) for every particle j > i near particle i (same 27
   /// cells), with d2 the squared centre distance; x is the array the grid
