@@ -455,6 +455,49 @@ TEST_CASE("boundary conditions: prescribed displacement and external force on a 
   }
 }
 
+TEST_CASE("loading plate: the spheres of a loaded set move as one along the load", "[dem]")
+{
+  // Two held spheres a1, a2, each bonded to one sphere of the plate {b1, b2};
+  // the two links differ (radii 1 and 1.5 mm: K_n1 != K_n2). Pulled with F
+  // in all along x, the plate stretches both links by the same delta =
+  // F / (K_n1 + K_n2) (springs in parallel); an equal share per sphere
+  // without the plate would give F / (2 K_n1) and F / (2 K_n2).
+  std::vector<double> x{0, 0, 0, 2e-3, 0, 0, 0, 6e-3, 0, 3e-3, 6e-3, 0}, r{1e-3, 1e-3, 1.5e-3, 1.5e-3};
+  Material m = concrete();
+  m.tensile = m.cohesion = 1e12; // elastic
+  const double k1 = m.law(1e-3, 1e-3, 2e-3).kn, k2 = m.law(1.5e-3, 1.5e-3, 3e-3).kn;
+  REQUIRE(std::abs(k2 / k1 - 1.0) > 0.2);
+  auto p = make_particles(x, r, 2400.0, 0.6);
+  auto l = create_links(p, 1.01, m);
+  REQUIRE(l.size() == 2);
+  const double dt = 0.5 * critical_time_step(p, l);
+  const double c = 2.0 * std::sqrt((k1 + k2) / (p.m[1] + p.m[3])); // critical for the plate's mode
+  DemSolver s(p, l, m, dt, c, 1e-4);
+  s.add_motion({"a", {0, 2}, MotionKind::fixed, {true, true, true}, {}});
+  const double F = 1e-7 * (k1 + k2);
+  s.add_force({"plate", {1, 3}, {1.0, 0.0, 0.0}, [=](double) { return 0.5 * F; }, true});
+  s.start();
+  for (int i = 0; i < 40000; ++i) // ~ 30 / omega of the slower sphere mode: converged to 1e-9
+    s.step();
+  const double d1 = p.x[3] - 2e-3, d2 = p.x[9] - 3e-3;
+  // tied velocities keep the displacements equal to round-off of the
+  // positions (~1e-19 m a step at 3 mm): 1e-6 of delta after 40,000 steps
+  INFO("d1 " << d1 << " m, d2 " << d2 << " m");
+  CHECK(std::abs(d1 - d2) < 1e-6 * d1);
+  // without the plate the two would differ by |K_n2 / K_n1 - 1| > 20 %
+  CHECK_THAT(d1, WithinRel(F / (k1 + k2), 1e-6));
+  // the tie's impulses do no work: the budget closes as for a free load
+  const auto e = s.energy();
+  CHECK(std::abs(e.imbalance()) < c * dt * e.damping);
+  // a plate sphere cannot be held, and a plate needs a direction
+  CHECK_THROWS_WITH(s.add_motion({"hold b1", {1}, MotionKind::fixed, {true, true, true}, {}}),
+                    Contains("loading plate 'plate'") && Contains("sphere 1"));
+  CHECK_THROWS_WITH(s.add_force({"p2", {0}, {1.0, 0.0, 0.0}, [](double) { return 1.0; }, true}),
+                    Contains("sphere 0") && Contains("held"));
+  CHECK_THROWS_WITH(s.add_force({"p3", {1}, {0.0, 0.0, 0.0}, [](double) { return 1.0; }, true}),
+                    Contains("non-zero"));
+}
+
 TEST_CASE("neighbour list: rebuilt only after a move of half the skin", "[dem]")
 {
   auto p = lattice(4);

@@ -1,5 +1,7 @@
 #include "dembridge/bridge/coupled.h"
 
+#include <chrono>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -7,6 +9,13 @@
 
 namespace dembridge::bridge
 {
+namespace
+{
+double now_s()
+{
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+} // namespace
 
 CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& l,
                              const dem::Material& mat, const CouplingOptions& o)
@@ -179,17 +188,27 @@ void CoupledSolver::start(std::span<const double> u_fe, std::span<const double> 
 
 double CoupledSolver::step()
 {
+  const double t0 = now_s();
   _fe_solver->begin_step();
+  const double t1 = now_s();
   _de_solver->begin_step();
+  const double t2 = now_s();
   correct(true);
+  const double t3 = now_s();
   _fe_solver->end_step();
+  const double t4 = now_s();
   _de_solver->end_step();
+  const double t5 = now_s();
   // RATTLE: the full-step velocities projected too. The positions do not
   // change (the projection is linear and the next half-step velocities are
   // projected anyway), but v(n+1) -- written out, and in the kinetic
   // energy -- then satisfies the constraint instead of carrying the
   // unconstrained dt/2 a of the lightest (floored) masses.
   correct(false);
+  const double t6 = now_s();
+  _time.fe += (t1 - t0) + (t4 - t3);
+  _time.de += (t2 - t1) + (t5 - t4);
+  _time.multipliers += (t3 - t2) + (t6 - t5);
   return _residual;
 }
 

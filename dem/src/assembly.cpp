@@ -157,26 +157,65 @@ std::vector<std::size_t> count_pairs(std::span<const double> x, std::span<const 
   return c;
 }
 
-double lambda_for_mean_links(std::span<const double> x, std::span<const double> r, double target)
+double lambda_for_mean_links(std::span<const double> x, std::span<const double> r, double target,
+                             std::span<const std::uint8_t> counted)
 {
   if (!(target > 0.0))
     impl::out_of_range("target mean links per sphere", target, "> 0");
-  // ratios q = D / (Ra + Rb) of all pairs up to 2; pick the quantile
-  std::vector<double> q;
-  for_pairs_within(x, r, 2.0, [&](std::int32_t i, std::int32_t j, double d)
-                   { q.push_back(d / (r[i] + r[j])); });
-  const std::size_t need = static_cast<std::size_t>(std::ceil(target * r.size() / 2.0));
+  if (!counted.empty() && counted.size() != r.size())
+    throw std::runtime_error("lambda_for_mean_links: " + std::to_string(counted.size()) + " flags for "
+                             + std::to_string(r.size()) + " spheres");
+  const std::size_t n = counted.empty() ? r.size()
+                                        : static_cast<std::size_t>(std::count(counted.begin(), counted.end(), 1));
+  if (n == 0)
+    throw std::runtime_error("lambda_for_mean_links: no sphere flagged to count links on (is the sample "
+                             "too small for its bulk?)");
+  if (counted.empty())
+  {
+    // every sphere counted: the (need / 2)-th smallest pair ratio
+    std::vector<double> all;
+    for_pairs_within(x, r, 2.0, [&](std::int32_t i, std::int32_t j, double d)
+                     { all.push_back(d / (r[i] + r[j])); });
+    const std::size_t need = static_cast<std::size_t>(std::ceil(target * n / 2.0));
+    if (need == 0)
+      return 1.0;
+    if (need > all.size())
+    {
+      std::ostringstream s;
+      s << "a mean of " << target << " links per sphere needs lambda > 2 on this packing (at "
+        << "lambda = 2 the mean is " << 2.0 * all.size() / n << ")";
+      throw std::runtime_error(s.str());
+    }
+    std::nth_element(all.begin(), all.begin() + (need - 1), all.end());
+    return std::max(1.0, all[need - 1] * (1.0 + 1e-12));
+  }
+  // ratios q = D / (Ra + Rb) of all pairs up to 2, each weighted by the
+  // number of its spheres counted; pick the weighted quantile
+  std::vector<std::pair<double, int>> q;
+  for_pairs_within(x, r, 2.0, [&](std::int32_t i, std::int32_t j, double d) {
+    const int w = counted[i] + counted[j];
+    if (w > 0)
+      q.emplace_back(d / (r[i] + r[j]), w);
+  });
+  const auto need = static_cast<std::size_t>(std::ceil(target * n));
+  std::size_t total = 0;
+  for (const auto& e : q)
+    total += e.second;
   if (need == 0)
     return 1.0;
-  if (need > q.size())
+  if (need > total)
   {
     std::ostringstream s;
     s << "a mean of " << target << " links per sphere needs lambda > 2 on this packing (at "
-      << "lambda = 2 the mean is " << 2.0 * q.size() / r.size() << ")";
+      << "lambda = 2 the mean is " << static_cast<double>(total) / n << ")";
     throw std::runtime_error(s.str());
   }
-  std::nth_element(q.begin(), q.begin() + (need - 1), q.end());
-  return std::max(1.0, q[need - 1] * (1.0 + 1e-12));
+  std::sort(q.begin(), q.end());
+  std::size_t acc = 0;
+  for (const auto& [ratio, w] : q)
+    if ((acc += w) >= need)
+      return std::max(1.0, ratio * (1.0 + 1e-12));
+  return std::max(1.0, q.back().first * (1.0 + 1e-12));
 }
 
 } // namespace dembridge::dem

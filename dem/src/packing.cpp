@@ -1,4 +1,5 @@
 #include "dembridge/dem/packing.h"
+#include "dembridge/dem/assembly.h"
 #include "dembridge/dem/neighbours.h"
 
 #include <algorithm>
@@ -783,6 +784,26 @@ Packing read_packing(const std::filesystem::path& file)
   if (p.r.empty())
     throw std::runtime_error("packing file '" + file.string() + "' holds no sphere");
   return p;
+}
+
+std::vector<std::uint8_t> inside(const Region& region, std::span<const double> x, double margin)
+{
+  std::vector<std::uint8_t> f(x.size() / 3);
+  for (std::size_t i = 0; i < f.size(); ++i)
+    f[i] = region.sdf({x[3 * i], x[3 * i + 1], x[3 * i + 2]}) < -margin ? 1 : 0;
+  return f;
+}
+
+double lambda_for_bulk_links(const Region& region, std::span<const double> x, std::span<const double> r,
+                             double links_per_sphere)
+{
+  const double rmax = r.empty() ? 0.0 : *std::max_element(r.begin(), r.end());
+  const auto bulk = inside(region, x, 2.0 * rmax);
+  if (std::find(bulk.begin(), bulk.end(), 1) == bulk.end())
+    throw std::runtime_error("region '" + region.name + "': no sphere lies 2 Rmax (" + std::to_string(2.0 * rmax)
+                             + " m) inside the boundary to set the bulk's links per sphere: the region is "
+                               "too small for these spheres");
+  return lambda_for_mean_links(x, r, links_per_sphere, bulk);
 }
 
 } // namespace dembridge::dem

@@ -646,6 +646,12 @@ void DemSolver::add_motion(ParticleMotion m)
   for (auto i : m.ids)
     if (i < 0 || static_cast<std::size_t>(i) >= _p.size())
       throw std::runtime_error("condition '" + m.name + "': sphere index out of range");
+  for (const auto& f : _forces)
+    if (f.plate)
+      for (auto i : m.ids)
+        if (std::find(f.ids.begin(), f.ids.end(), i) != f.ids.end())
+          throw std::runtime_error("condition '" + m.name + "' holds sphere " + std::to_string(i)
+                                   + " of the loading plate '" + f.name + "': a plate's spheres must move freely");
   _motions.push_back(std::move(m));
   update_held();
 }
@@ -669,6 +675,17 @@ void DemSolver::add_force(ParticleForce f)
   for (auto i : f.ids)
     if (i < 0 || static_cast<std::size_t>(i) >= _p.size())
       throw std::runtime_error("force '" + f.name + "': sphere index out of range");
+  if (f.plate)
+  {
+    const double len = std::sqrt(dot3(f.direction.data(), f.direction.data()));
+    if (!(len > 0.0) || !std::isfinite(len))
+      throw std::runtime_error("force '" + f.name + "': a loading plate needs a non-zero, finite direction");
+    for (auto i : f.ids)
+      for (int k = 0; k < 3; ++k)
+        if (_held[6 * i + k])
+          throw std::runtime_error("force '" + f.name + "': sphere " + std::to_string(i)
+                                   + " of the loading plate is held by a condition; a plate's spheres must move freely");
+  }
   _forces.push_back(std::move(f));
   // external force arrays only once there is an external force
   _fext.resize(3 * _p.size(), 0.0);
@@ -689,6 +706,30 @@ void external(const std::vector<ParticleForce>& forces, double t, std::vector<do
   }
 }
 } // namespace
+
+void DemSolver::tie_plates()
+{
+  for (const auto& f : _forces)
+  {
+    if (!f.plate)
+      continue;
+    const double len = std::sqrt(dot3(f.direction.data(), f.direction.data()));
+    const double d[3] = {f.direction[0] / len, f.direction[1] / len, f.direction[2] / len};
+    double mv = 0.0, m = 0.0;
+    for (auto i : f.ids)
+    {
+      mv += _p.m[i] * dot3(d, &_p.v[3 * i]);
+      m += _p.m[i];
+    }
+    const double vbar = mv / m;
+    for (auto i : f.ids)
+    {
+      const double dv = vbar - dot3(d, &_p.v[3 * i]);
+      for (int k = 0; k < 3; ++k)
+        _p.v[3 * i + k] += dv * d[k];
+    }
+  }
+}
 
 void DemSolver::start()
 {
@@ -738,6 +779,7 @@ void DemSolver::begin_step()
     _vold[q] = _p.v[d];
   }
   kick(0.5 * dt);
+  tie_plates();
   for (const auto& m : _motions)
     for (auto i : m.ids)
       for (int k = 0; k < 3; ++k)
@@ -823,6 +865,7 @@ void DemSolver::end_step()
     _reac[q] = R;
   }
   kick(0.5 * dt);
+  tie_plates();
   for (const auto& m : _motions)
     if (m.kind == MotionKind::velocity)
       for (auto i : m.ids)

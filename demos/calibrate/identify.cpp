@@ -40,6 +40,7 @@ struct Runner
                         {"youngs_modulus_pa", r["youngs_modulus_pa"]},
                         {"poisson_ratio", r["poisson_ratio"]},
                         {"peak_stress_pa", r["peak_stress_pa"]},
+                        {"particles", r["particles"]},
                         {"wall_s", r["wall_s"]}};
     history.push_back(h);
     if (!cfg.quiet)
@@ -47,6 +48,72 @@ struct Runner
     return r;
   }
 };
+
+/// Writes a packing of the sample's region and options to a temporary file
+/// and returns its path.
+std::string temporary_packing(const SampleConfig& s, const std::string& tag)
+{
+  const double D = s.diameter, H = s.height;
+  const dem::Region region = s.shape == "cylinder" ? dem::cylinder_region({0, 0, 0}, 0.5 * D, H)
+                                                   : dem::box_region({0, 0, 0}, {D, D, H});
+  dem::PackingOptions po;
+  po.mean_radius = s.mean_radius;
+  po.radius_ratio = s.radius_ratio;
+  po.seed = s.seed;
+  const auto pk = dem::generate_packing(region, po);
+  const auto file = std::filesystem::temp_directory_path()
+                    / ("dembridge_calibration_" + std::to_string(::getpid()) + "_" + tag + ".txt");
+  dem::write_packing(file, pk);
+  return file.string();
+}
+
+/// E and nu (initial tangent of an elastic compression test) and, unless
+/// elastic_only, the peaks of full tension and compression tests.
+nlohmann::json measure(Runner& R, const dem::Material& m, bool elastic_only, nlohmann::json* tension = nullptr,
+                       nlohmann::json* compression = nullptr, const std::string& out_t = "",
+                       const std::string& out_c = "")
+{
+  const auto elastic = R.run(m, "compression", true);
+  nlohmann::json a = {{"youngs_modulus_pa", elastic["youngs_modulus_pa"]},
+                      {"poisson_ratio", elastic["poisson_ratio"]}};
+  const auto t = elastic_only ? nlohmann::json() : R.run(m, "tension", false, out_t);
+  const auto c = R.run(m, "compression", elastic_only, out_c);
+  if (!elastic_only)
+  {
+    a["tensile_strength_pa"] = t["peak_stress_pa"];
+    a["compressive_strength_pa"] = c["peak_stress_pa"];
+    // for information: the secant-like slope of the full compression test
+    // (5-30 % of the peak) already includes early link failures
+    a["compression_test_modulus_pa"] = c["youngs_modulus_pa"];
+  }
+  if (tension)
+    *tension = t;
+  if (compression)
+    *compression = c;
+  return a;
+}
+
+/// Differences of `a` from `ref` (relative; nu absolute) and whether each is
+/// within its tolerance.
+nlohmann::json compare(const nlohmann::json& a, const nlohmann::json& ref, double tol_e, double tol_nu,
+                       double tol_s)
+{
+  nlohmann::json d, ok;
+  bool all = true;
+  for (const char* k : {"youngs_modulus_pa", "poisson_ratio", "tensile_strength_pa", "compressive_strength_pa"})
+  {
+    if (!a.contains(k) || !ref.contains(k))
+      continue;
+    const double x = a[k].get<double>(), y = ref[k].get<double>();
+    const bool nu = std::string(k) == "poisson_ratio";
+    const double diff = nu ? x - y : x / y - 1.0;
+    const double tol = nu ? tol_nu : (std::string(k) == "youngs_modulus_pa" ? tol_e : tol_s);
+    d[k] = diff;
+    ok[k] = std::abs(diff) < tol;
+    all = all && std::abs(diff) < tol;
+  }
+  return {{"achieved", a}, {"difference", d}, {"within_tolerance", ok}, {"within", all}};
+}
 
 [[noreturn]] void unreachable(const std::string& what, double v, double lo, double hi,
                               const std::string& why)
@@ -79,23 +146,12 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
       unreachable("sigma_c/sigma_t", t.compressive_strength / t.tensile_strength, 1.0, 1e300,
                   "a DE concrete is stronger in compression than in tension");
   }
+  if (cfg.checks && !cfg.sample.packing_file.empty())
+    throw std::runtime_error("the checks generate a second packing and a larger sample: they need the "
+                             "sample's generator settings, not a packing file (" + cfg.sample.packing_file + ")");
   // one packing for all tests
   if (cfg.sample.packing_file.empty())
-  {
-    const double D = cfg.sample.diameter, H = cfg.sample.height;
-    const dem::Region region = cfg.sample.shape == "cylinder"
-                                   ? dem::cylinder_region({0, 0, 0}, 0.5 * D, H)
-                                   : dem::box_region({0, 0, 0}, {D, D, H});
-    dem::PackingOptions po;
-    po.mean_radius = cfg.sample.mean_radius;
-    po.radius_ratio = cfg.sample.radius_ratio;
-    po.seed = cfg.sample.seed;
-    const auto pk = dem::generate_packing(region, po);
-    const auto file = std::filesystem::temp_directory_path()
-                      / ("dembridge_calibration_" + std::to_string(::getpid()) + ".txt");
-    dem::write_packing(file, pk);
-    cfg.sample.packing_file = file.string();
-  }
+    cfg.sample.packing_file = temporary_packing(cfg.sample, "main");
   Runner R{cfg};
   dem::Material m = cfg.fixed;
   m.youngs_modulus = t.youngs_modulus;
@@ -194,20 +250,45 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
   // final tests with the identified parameters
   auto out = [&](const char* name)
   { return cfg.output_dir.empty() ? std::string() : (std::filesystem::path(cfg.output_dir) / name).string(); };
-  // E and nu: initial tangent of an elastic test (no breakage); strengths:
-  // peaks of the full tests
-  const auto elastic = R.run(m, "compression", true);
-  res.tension = cfg.elastic_only ? nlohmann::json() : R.run(m, "tension", false, out("tension"));
-  res.compression = R.run(m, "compression", cfg.elastic_only, out("compression"));
-  res.achieved = {{"youngs_modulus_pa", elastic["youngs_modulus_pa"]},
-                  {"poisson_ratio", elastic["poisson_ratio"]}};
-  if (!cfg.elastic_only)
+  res.achieved = measure(R, m, cfg.elastic_only, &res.tension, &res.compression, out("tension"), out("compression"));
+  if (cfg.checks)
   {
-    res.achieved["tensile_strength_pa"] = res.tension["peak_stress_pa"];
-    res.achieved["compressive_strength_pa"] = res.compression["peak_stress_pa"];
-    // for information: the secant-like slope of the full compression test
-    // (5-30 % of the peak) already includes early link failures
-    res.achieved["compression_test_modulus_pa"] = res.compression["youngs_modulus_pa"];
+    if (!cfg.quiet)
+      std::cout << "checks: half the strain rate, a second packing, a sample of twice the volume" << std::endl;
+    // quasi-static: halving the rate changes nothing by 1 % or more
+    {
+      Runner h{cfg};
+      h.cfg.sample.strain_rate *= 0.5;
+      res.checks["half_rate"] = compare(measure(h, m, cfg.elastic_only), res.achieved, 0.01, 0.01, 0.01);
+      R.history.insert(R.history.end(), h.history.begin(), h.history.end());
+    }
+    // independence of the sample: the accuracy against the targets
+    // (the strengths, when T and C0 were given, against those measured here)
+    nlohmann::json ref = res.achieved;
+    ref["youngs_modulus_pa"] = t.youngs_modulus;
+    ref["poisson_ratio"] = t.poisson_ratio;
+    if (!cfg.given_local_strengths && !cfg.elastic_only)
+    {
+      ref["tensile_strength_pa"] = t.tensile_strength;
+      ref["compressive_strength_pa"] = t.compressive_strength;
+    }
+    for (const char* which : {"second_packing", "larger_sample"})
+    {
+      Runner o{cfg};
+      SampleConfig& s = o.cfg.sample;
+      if (std::string(which) == "second_packing")
+        s.seed += 1;
+      else
+      {
+        s.diameter *= std::cbrt(2.0);
+        s.height *= std::cbrt(2.0);
+      }
+      s.packing_file = temporary_packing(s, which);
+      res.checks[which] = compare(measure(o, m, cfg.elastic_only), ref, 0.02, 0.02, 0.05);
+      res.checks[which]["particles"] = o.history.back().value("particles", 0);
+      std::filesystem::remove(s.packing_file);
+      R.history.insert(R.history.end(), o.history.begin(), o.history.end());
+    }
   }
   res.history = R.history;
   res.file.material = m;

@@ -51,6 +51,9 @@ int main(int argc, char** argv)
   app.add_option("--tolerance-strength", c.tol_strength, "relative tolerance on sigma_c/sigma_t")
       ->capture_default_str();
   app.add_flag("--elastic-only", c.elastic_only, "identify alpha, beta, gamma only");
+  app.add_flag("--checks", c.checks,
+               "then measure again at half the strain rate (< 1 % asked), on a second packing (seed + 1) "
+               "and on a sample of twice the volume (E 2 %, nu 0.02, strengths 5 %)");
   double local_t = 0.0, local_c0 = 0.0;
   auto* opt_t = app.add_option("--local-tensile", local_t,
                                "give the local tensile strength T [Pa] instead of identifying it "
@@ -92,6 +95,8 @@ int main(int argc, char** argv)
                          {"tensile_strength_pa", m.tensile}, {"cohesion_pa", m.cohesion},
                          {"softening", m.zeta}, {"phi_i_deg", m.phi_i_deg},
                          {"phi_c_deg", m.phi_c_deg}, {"lambda", r.file.lambda}};
+    if (c.checks)
+      out["checks"] = r.checks;
     out["simulated_tests"] = r.history.size();
     out["particles"] = r.compression["particles"];
     out["wall_s"] = clock.seconds();

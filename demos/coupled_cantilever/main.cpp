@@ -106,7 +106,7 @@ int main(int argc, char** argv)
     for (double r : pk.r)
       solid_volume += 4.0 / 3.0 * std::numbers::pi * r * r * r;
     auto p = dem::make_particles(pk.x, pk.r, mat.density, solid_volume / region.volume);
-    auto links = dem::create_links(p, dem::lambda_for_mean_links(p.x, p.r, mf.links_per_sphere), mat);
+    auto links = dem::create_links(p, dem::lambda_for_bulk_links(region, p.x, p.r, mf.links_per_sphere), mat);
 
     bridge::CouplingOptions o;
     o.overlap = {{1.0, 0.0, 0.0}, fe_length, de_start};

@@ -50,6 +50,14 @@ struct CoupledEnergy
   double imbalance() const { return fe.imbalance() + de.imbalance(); }
 };
 
+/// Wall time spent in each part of the coupled steps so far [s].
+struct CoupledTimings
+{
+  double fe = 0.0;          ///< the shell's kicks, drift and internal forces
+  double de = 0.0;          ///< the spheres' kicks, drift, neighbours and forces
+  double multipliers = 0.0; ///< the two multiplier corrections per step
+};
+
 /// Critical time step of a DE assembly alone [s]: 2 / sqrt(lambda_max) of
 /// its linearised link stiffness (translations and rotations, link weights
 /// included) over its masses and inertias, by power iteration (relative
@@ -91,6 +99,7 @@ public:
   std::size_t constrained() const { return _ids.size(); }
   const CouplingOperator& coupling() const { return _op; }
   CoupledEnergy energy() const;
+  const CoupledTimings& timings() const { return _time; }
 
 private:
   void correct(bool half_step);
@@ -102,6 +111,7 @@ private:
   std::unique_ptr<MultiplierSolver> _mult;
   std::unique_ptr<shell::ExplicitSolver> _fe_solver;
   std::unique_ptr<dem::DemSolver> _de_solver;
+  CoupledTimings _time;
   double _dt = 0.0, _dt_coupled = 0.0, _dt_fe = 0.0, _dt_de = 0.0, _multiplier_energy = 0.0,
          _residual = 0.0;
 };

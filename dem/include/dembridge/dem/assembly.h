@@ -106,8 +106,14 @@ std::vector<std::size_t> count_pairs(std::span<const double> x, std::span<const 
                                      std::span<const double> lambdas);
 
 /// Smallest lambda (to 1e-4) giving a mean number of links per sphere of at
-/// least `target` (2 x pairs / spheres). @throws if target is unreachable
-/// with lambda <= 2.
-double lambda_for_mean_links(std::span<const double> x, std::span<const double> r, double target);
+/// least `target` (2 x pairs / spheres). With `counted` (one flag per
+/// sphere), the mean is over the flagged spheres only, their links to any
+/// sphere counted: flag the bulk (e.g. spheres 2 Rmax or more inside the
+/// boundary, see dem::inside) so that the spheres at a face, which miss
+/// neighbours, do not raise lambda, and packings of any size get the same
+/// bulk coordination. @throws if target is unreachable with lambda <= 2 or
+/// no sphere is flagged.
+double lambda_for_mean_links(std::span<const double> x, std::span<const double> r, double target,
+                             std::span<const std::uint8_t> counted = {});
 
 } // namespace dembridge::dem

@@ -29,7 +29,9 @@
 
 #include <array>
 #include <filesystem>
+#include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -109,6 +111,18 @@ double packing_fraction(const Packing& p, const Region& region, double margin,
 double face_gap(const Packing& p, const Region& region, int axis, double value,
                 int samples_per_side = 200);
 
+/// One flag per sphere: 1 if its centre lies at least `margin` inside the
+/// region (sdf < -margin), e.g. the bulk for dem::lambda_for_mean_links.
+std::vector<std::uint8_t> inside(const Region& region, std::span<const double> x, double margin);
+/// Interaction range lambda giving `links_per_sphere` links per sphere on
+/// average in the bulk: over the spheres 2 Rmax or more inside the region
+/// (their links to any sphere counted). The spheres at a face miss
+/// neighbours; counting them would raise lambda, the more so the smaller the
+/// sample, and make the bulk of a small sample stiffer than that of a
+/// large one (measured: E 27.4 GPa on 400 spheres, 23.8 GPa on 3,200, with
+/// the same parameters). @throws if no sphere is that far inside.
+double lambda_for_bulk_links(const Region& region, std::span<const double> x, std::span<const double> r,
+                             double links_per_sphere);
 /// Writes `x y z r` lines (full precision).
 void write_packing(const std::filesystem::path& file, const Packing& p);
 /// Reads `x y z r` lines ('#' starts a comment). @throws std::runtime_error

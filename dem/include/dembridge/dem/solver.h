@@ -130,6 +130,14 @@ struct ParticleForce
   std::vector<std::int32_t> ids;
   std::array<double, 3> direction{1.0, 0.0, 0.0};
   History value;
+  /// Load through a rigid plate: the spheres' velocity components along
+  /// `direction` are made equal (their mass-weighted mean, so momentum is
+  /// kept) after every kick, so the set moves as one along the load and the
+  /// total force spreads as a stiff loading plate spreads it, whatever each
+  /// sphere's bonds (an equal share per sphere would push a loosely bonded
+  /// surface sphere far out). Other components stay free. The set must not
+  /// share spheres with a kinematic condition.
+  bool plate = false;
 };
 
 /// Energy budget [J]: kinetic + elastic + softening + breakage + friction +
@@ -198,6 +206,7 @@ public:
 private:
   void kick(double h);
   void update_held();
+  void tie_plates(); // loading plates: equal velocity along the load
   Particles& _p;
   Links& _l;
   Material _mat;
