@@ -24,7 +24,6 @@ int main(int argc, char** argv)
   auto& t = c.target;
   auto& s = c.sample;
   std::string output, summary, plot = "1";
-  s.mean_radius = 4e-3;
   CLI::App app{"Identification of the DE parameters from macroscopic concrete properties", "calibrate"};
   app.add_option("--youngs-modulus", t.youngs_modulus, "target Young's modulus E [Pa]")->capture_default_str();
   app.add_option("--poisson-ratio", t.poisson_ratio, "target Poisson's ratio [-]")->capture_default_str();
