@@ -75,6 +75,35 @@ TEST_CASE("links: every pair within lambda (Ra + Rb), sorted, eq. [1] stiffness"
   CHECK(2.0 * c[0] / p.size() >= 6.0);
   CHECK(2.0 * c[1] / p.size() < 6.0);
   CHECK_THROWS_WITH(create_links(p, 0.9, m), Contains("lambda = 0.9") && Contains(">= 1"));
+  // counted over the inner spheres only (their links to any sphere): the
+  // mean over them reaches the target and falls below it just under that
+  // lambda; the outer spheres miss neighbours, so the lambda is smaller
+  // than the one counted over all spheres
+  std::vector<std::uint8_t> inner(p.size(), 0);
+  for (std::size_t i = 0; i < p.size(); ++i)
+  {
+    bool in = true;
+    for (int d = 0; d < 3; ++d)
+      in = in && p.x[3 * i + d] > 1e-3 && p.x[3 * i + d] < 5e-3; // the 8 of the 4^3 not on a face
+    inner[i] = in ? 1 : 0;
+  }
+  const double lam_in = lambda_for_mean_links(p.x, p.r, 6.0, inner);
+  auto inner_mean = [&](double lambda) {
+    const auto li = create_links(p, lambda, m);
+    double ends = 0.0, n = 0.0;
+    for (std::size_t k = 0; k < li.size(); ++k)
+      ends += inner[li.a[k]] + inner[li.b[k]];
+    for (auto f : inner)
+      n += f;
+    return ends / n;
+  };
+  CHECK(inner_mean(lam_in) >= 6.0);
+  CHECK(inner_mean(lam_in * (1 - 1e-6)) < 6.0);
+  CHECK(lam_in < lam);
+  CHECK_THROWS_WITH(lambda_for_mean_links(p.x, p.r, 6.0, std::vector<std::uint8_t>(p.size(), 0)),
+                    Contains("no sphere flagged"));
+  CHECK_THROWS_WITH(lambda_for_mean_links(p.x, p.r, 6.0, std::vector<std::uint8_t>(3, 1)),
+                    Contains("3 flags for"));
 }
 
 TEST_CASE("Newton's third law: internal forces and moments sum to zero", "[dem]")

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 #include <sstream>
 #include <stdexcept>
 
@@ -167,40 +168,25 @@ double lambda_for_mean_links(std::span<const double> x, std::span<const double> 
                              + std::to_string(r.size()) + " spheres");
   const std::size_t n = counted.empty() ? r.size()
                                         : static_cast<std::size_t>(std::count(counted.begin(), counted.end(), 1));
+  if (n == 0 && counted.empty())
+    return 1.0; // no sphere, no link
   if (n == 0)
     throw std::runtime_error("lambda_for_mean_links: no sphere flagged to count links on (is the sample "
                              "too small for its bulk?)");
-  if (counted.empty())
-  {
-    // every sphere counted: the (need / 2)-th smallest pair ratio
-    std::vector<double> all;
-    for_pairs_within(x, r, 2.0, [&](std::int32_t i, std::int32_t j, double d)
-                     { all.push_back(d / (r[i] + r[j])); });
-    const std::size_t need = static_cast<std::size_t>(std::ceil(target * n / 2.0));
-    if (need == 0)
-      return 1.0;
-    if (need > all.size())
-    {
-      std::ostringstream s;
-      s << "a mean of " << target << " links per sphere needs lambda > 2 on this packing (at "
-        << "lambda = 2 the mean is " << 2.0 * all.size() / n << ")";
-      throw std::runtime_error(s.str());
-    }
-    std::nth_element(all.begin(), all.begin() + (need - 1), all.end());
-    return std::max(1.0, all[need - 1] * (1.0 + 1e-12));
-  }
-  // ratios q = D / (Ra + Rb) of all pairs up to 2, each weighted by the
-  // number of its spheres counted; pick the weighted quantile
-  std::vector<std::pair<double, int>> q;
+  // ratios q = D / (Ra + Rb) of all pairs up to 2, each weighing the number
+  // of its spheres counted (2 for every pair when all are)
+  std::vector<double> q;
+  std::vector<std::uint8_t> w;
   for_pairs_within(x, r, 2.0, [&](std::int32_t i, std::int32_t j, double d) {
-    const int w = counted[i] + counted[j];
-    if (w > 0)
-      q.emplace_back(d / (r[i] + r[j]), w);
+    const int k = counted.empty() ? 2 : counted[i] + counted[j];
+    if (k == 0)
+      return;
+    q.push_back(d / (r[i] + r[j]));
+    if (!counted.empty())
+      w.push_back(static_cast<std::uint8_t>(k));
   });
-  const auto need = static_cast<std::size_t>(std::ceil(target * n));
-  std::size_t total = 0;
-  for (const auto& e : q)
-    total += e.second;
+  const auto need = static_cast<std::size_t>(std::ceil(target * n)); // in link ends
+  const std::size_t total = counted.empty() ? 2 * q.size() : std::accumulate(w.begin(), w.end(), std::size_t{0});
   if (need == 0)
     return 1.0;
   if (need > total)
@@ -210,12 +196,21 @@ double lambda_for_mean_links(std::span<const double> x, std::span<const double> 
       << "lambda = 2 the mean is " << static_cast<double>(total) / n << ")";
     throw std::runtime_error(s.str());
   }
-  std::sort(q.begin(), q.end());
+  if (counted.empty())
+  {
+    // equal weights: the ceil(need / 2)-th smallest ratio, without a sort
+    const std::size_t k = (need + 1) / 2 - 1;
+    std::nth_element(q.begin(), q.begin() + k, q.end());
+    return std::max(1.0, q[k] * (1.0 + 1e-12));
+  }
+  std::vector<std::size_t> order(q.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) { return q[i] < q[j]; });
   std::size_t acc = 0;
-  for (const auto& [ratio, w] : q)
-    if ((acc += w) >= need)
-      return std::max(1.0, ratio * (1.0 + 1e-12));
-  return std::max(1.0, q.back().first * (1.0 + 1e-12));
+  for (auto i : order)
+    if ((acc += w[i]) >= need)
+      return std::max(1.0, q[i] * (1.0 + 1e-12));
+  return std::max(1.0, q[order.back()] * (1.0 + 1e-12));
 }
 
 } // namespace dembridge::dem
