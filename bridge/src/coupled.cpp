@@ -159,7 +159,9 @@ void CoupledSolver::correct(bool half_step)
   for (std::size_t q = 0; q < _ids.size(); ++q)
     for (int d = 0; d < 3; ++d)
       _v_de[3 * q + d] = _p.v[3 * _ids[q] + d];
-  const double r = _mult->correct(_v_de, v_fe);
+  // the residual is checked after the half-step correction (the one the
+  // positions move with); the full-step one only makes v(n+1) consistent
+  const double r = _mult->correct(_v_de, v_fe, half_step);
   for (std::size_t q = 0; q < _ids.size(); ++q)
     for (int d = 0; d < 3; ++d)
       _p.v[3 * _ids[q] + d] = _v_de[3 * q + d];

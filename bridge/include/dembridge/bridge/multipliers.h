@@ -33,8 +33,9 @@ public:
   ~MultiplierSolver();
 
   /// Corrects v_de (points, 3) and v_fe (nodes, 6) in place; returns the
-  /// largest |G_DE v_DE - G_FE v_FE| component after the correction [m/s].
-  double correct(std::span<double> v_de, std::span<double> v_fe);
+  /// largest |G_DE v_DE - G_FE v_FE| component after the correction [m/s],
+  /// or NaN when `residual` is false (one pass over the points saved).
+  double correct(std::span<double> v_de, std::span<double> v_fe, bool residual = true);
 
   /// Multipliers of the last correction (points, 3) [N]: dt lambda is the
   /// impulse the constraint applies to each particle (with a minus sign).
