@@ -32,9 +32,10 @@ TEST_CASE("bar, reduced: static shapes against beam theory, dynamic frequencies 
   INFO("E measured on the DE bar " << E << " Pa");
   // the E identified on the calibration sample (30 GPa, 10,710 spheres) is
   // what this bar shows: the same links per sphere in the bulk (lambda set
-  // on the bulk of each packing); within 10 % (the skins differ: sample
-  // sizes, see the identification's checks); measured 28.0 GPa. Before
-  // lambda was set on the bulk, this bar showed 25.8 GPa.
+  // on the bulk of each packing), less the skins (the skin model of the
+  // checks below: section share A_eff 0.88 on this bar, 0.96 on the 15 cm
+  // calibration cylinder, so -8 %): within 10 %; measured 28.0 GPa (-6.6 %).
+  // Before lambda was set on the bulk, this bar showed 25.8 GPa.
   CHECK(std::abs(E / 30e9 - 1.0) < 0.1);
   for (const std::string load : {"tension", "bending"})
   {
@@ -49,28 +50,39 @@ TEST_CASE("bar, reduced: static shapes against beam theory, dynamic frequencies 
       // Beam theory over the span from the support to the load (for a set of
       // spheres: the mean x of their centres), the end loaded through a
       // rigid plate. FE: the issue's 2 % (measured -0.2 % tension, -0.6 %
-      // bending: the clamp holds the Poisson contraction). DE alone and
-      // coupled in tension: E was measured on the DE bar's middle half; the
-      // spheres at the end faces are a softer skin (fewer links, see below)
-      // that it does not see, about 2 radii of 83 cm here, and the coupled
-      // bar has its own packing: 5 % (measured DE +3.3 %, coupled +0.8 %;
-      // full size, 1 cm spheres: in README). DE in bending: the outer layer of spheres lies flat on the
-      // face with ~7 links per sphere against 12-13 in the bulk, a softer
-      // skin about one radius deep that bending weights by z^2 and the
-      // tension-measured E does not see: the DE bar is softer than beam
-      // theory by a share that falls with the radius (measured +9.5 % at
-      // R = 2 cm, 6 spheres across; full size in README): softer, and by
-      // less than 15 %. The coupled bar in
-      // bending: the open defect, in the test case below.
+      // bending: the clamp holds the Poisson contraction).
+      // Spheres: the layer at each face lies flat on it with ~7 links per
+      // sphere against 12 in the bulk: a skin about one radius deep with
+      // ~7/12 of the bulk's stiffness (model below, measured profile in
+      // README). E was measured in tension on the middle half, so it holds
+      // the skins of the four long faces but not those of the end faces,
+      // and not the z^2 weight bending gives the top and bottom skins.
+      const double sk = 7.0 / 12.0, t = c.mean_radius / c.width; // skin stiffness share, depth / side
+      const double span = r.at("beam_span_m").get<double>();
+      // tension: the end skins (one at the DE bar's support, one at each
+      // loaded end) add (1/sk - 1) R / span each; a margin of 2 % for E,
+      // which scatters by ~2 % between packings (the coupled bar has its
+      // own). Measured DE +3.3 % (estimate 3.4 %), coupled +0.8 % (1.7 %).
+      const double ends = model == "de" ? 2.0 : 1.0;
+      const double est_tension = ends * (1.0 / sk - 1.0) * c.mean_radius / span;
+      // bending: compliance over what the tension E predicts, A_eff / A over
+      // I_eff / I with the skin on all four long faces (the bending part,
+      // ~94 % of the deflection here; shear neglected): +10.9 % at R = 2 cm,
+      // measured +9.5 %. The skin's depth and softness are known to about
+      // half, so the DE bending error must lie in [0.5, 1.5] x the estimate.
+      const double a_eff = 1.0 - (1.0 - sk) * (1.0 - std::pow(1.0 - 2.0 * t, 2));
+      const double i_eff = 1.0 - (1.0 - sk) * (1.0 - std::pow(1.0 - 2.0 * t, 4));
+      const double est_bending = a_eff / i_eff - 1.0;
+      INFO("skin estimates: tension " << est_tension << ", bending " << est_bending);
       if (model == "coupled" && load == "bending")
-        continue;
+        continue; // the open defect, in the test case below
       if (model == "de" && load == "bending")
       {
-        CHECK(err > 0.0);
-        CHECK(err < 0.15);
+        CHECK(err > 0.5 * est_bending);
+        CHECK(err < 1.5 * est_bending);
         continue;
       }
-      const double tol = model == "fe" ? 0.02 : 0.05;
+      const double tol = model == "fe" ? 0.02 : 0.02 + est_tension;
       CHECK(std::abs(err) < tol);
     }
     double f[3];

@@ -794,16 +794,22 @@ std::vector<std::uint8_t> inside(const Region& region, std::span<const double> x
   return f;
 }
 
-double lambda_for_bulk_links(const Region& region, std::span<const double> x, std::span<const double> r,
-                             double links_per_sphere)
+std::vector<std::uint8_t> bulk_spheres(const Region& region, std::span<const double> x,
+                                       std::span<const double> r)
 {
   const double rmax = r.empty() ? 0.0 : *std::max_element(r.begin(), r.end());
-  const auto bulk = inside(region, x, 2.0 * rmax);
+  auto bulk = inside(region, x, 2.0 * rmax);
   if (std::find(bulk.begin(), bulk.end(), 1) == bulk.end())
     throw std::runtime_error("region '" + region.name + "': no sphere lies 2 Rmax (" + std::to_string(2.0 * rmax)
                              + " m) inside the boundary to set the bulk's links per sphere: the region is "
                                "too small for these spheres");
-  return lambda_for_mean_links(x, r, links_per_sphere, bulk);
+  return bulk;
+}
+
+double lambda_for_bulk_links(const Region& region, std::span<const double> x, std::span<const double> r,
+                             double links_per_sphere)
+{
+  return lambda_for_mean_links(x, r, links_per_sphere, bulk_spheres(region, x, r));
 }
 
 } // namespace dembridge::dem

@@ -49,21 +49,15 @@ struct Runner
   }
 };
 
-/// Writes a packing of the sample's region and options to a temporary file
-/// and returns its path.
-std::string temporary_packing(const SampleConfig& s, const std::string& tag)
+/// Generates the sample's packing (sample_packing of its generator
+/// settings, whatever packing file it names) into a temporary file and
+/// returns its path.
+std::string temporary_packing(SampleConfig s, const std::string& tag)
 {
-  const double D = s.diameter, H = s.height;
-  const dem::Region region = s.shape == "cylinder" ? dem::cylinder_region({0, 0, 0}, 0.5 * D, H)
-                                                   : dem::box_region({0, 0, 0}, {D, D, H});
-  dem::PackingOptions po;
-  po.mean_radius = s.mean_radius;
-  po.radius_ratio = s.radius_ratio;
-  po.seed = s.seed;
-  const auto pk = dem::generate_packing(region, po);
+  s.packing_file.clear();
   const auto file = std::filesystem::temp_directory_path()
                     / ("dembridge_calibration_" + std::to_string(::getpid()) + "_" + tag + ".txt");
-  dem::write_packing(file, pk);
+  dem::write_packing(file, sample_packing(s));
   return file.string();
 }
 

@@ -36,6 +36,26 @@ double slope(const std::vector<double>& x, const std::vector<double>& y)
 }
 } // namespace
 
+Region sample_region(const SampleConfig& cfg)
+{
+  if (cfg.shape == "cylinder")
+    return cylinder_region({0.0, 0.0, 0.0}, 0.5 * cfg.diameter, cfg.height);
+  if (cfg.shape == "prism")
+    return box_region({0.0, 0.0, 0.0}, {cfg.diameter, cfg.diameter, cfg.height});
+  throw std::runtime_error("shape '" + cfg.shape + "': allowed are cylinder, prism");
+}
+
+Packing sample_packing(const SampleConfig& cfg)
+{
+  if (!cfg.packing_file.empty())
+    return read_packing(cfg.packing_file);
+  PackingOptions po;
+  po.mean_radius = cfg.mean_radius;
+  po.radius_ratio = cfg.radius_ratio;
+  po.seed = cfg.seed;
+  return generate_packing(sample_region(cfg), po);
+}
+
 nlohmann::json run_sample(const SampleConfig& cfg)
 {
   Stopwatch clock;
@@ -54,28 +74,18 @@ nlohmann::json run_sample(const SampleConfig& cfg)
   cfg.material.validate();
   const double D = cfg.diameter, H = cfg.height;
   const bool cyl = cfg.shape == "cylinder";
-  const Region region = cyl ? cylinder_region({0.0, 0.0, 0.0}, 0.5 * D, H)
-                            : box_region({0.0, 0.0, 0.0}, {D, D, H});
+  const Region region = sample_region(cfg);
   const double area = cyl ? std::numbers::pi * D * D / 4.0 : D * D;
 
-  Packing pk;
-  if (!cfg.packing_file.empty())
-    pk = read_packing(cfg.packing_file);
-  else
-  {
-    PackingOptions po;
-    po.mean_radius = cfg.mean_radius;
-    po.radius_ratio = cfg.radius_ratio;
-    po.seed = cfg.seed;
-    pk = generate_packing(region, po);
-  }
+  const Packing pk = sample_packing(cfg);
   double solid = 0.0;
   for (double r : pk.r)
     solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
   const double fraction = solid / region.volume;
   Particles p = make_particles(pk.x, pk.r, cfg.material.density, fraction);
+  const auto bulk = bulk_spheres(region, p.x, p.r);
   const double lambda = cfg.lambda > 0.0 ? cfg.lambda
-                                         : lambda_for_bulk_links(region, p.x, p.r, cfg.links_per_sphere);
+                                         : lambda_for_mean_links(p.x, p.r, cfg.links_per_sphere, bulk);
   Links links = create_links(p, lambda, cfg.material);
   const double rmax = *std::max_element(p.r.begin(), p.r.end());
   const double rmin = *std::min_element(p.r.begin(), p.r.end());
@@ -184,8 +194,7 @@ nlohmann::json run_sample(const SampleConfig& cfg)
   out["lambda"] = lambda;
   out["mean_links_per_particle"] = 2.0 * links.size() / p.size();
   {
-    // in the bulk (2 Rmax or more inside), where --links-per-sphere applies
-    const auto bulk = inside(region, p.x, 2.0 * rmax);
+    // in the bulk, where --links-per-sphere applies
     std::size_t nb = 0, lb = 0;
     for (std::size_t k = 0; k < links.size(); ++k)
       lb += bulk[links.a[k]] + bulk[links.b[k]];

@@ -4,11 +4,15 @@
 /// square prism), as a function the dem_sample demo, the tests and the
 /// calibration share. The bottom layer of spheres is held axially, the top
 /// layer moves axially at a constant strain rate (ramped in over 20 wave
-/// transits); both are free laterally (frictionless platens). Stress is the
-/// top reaction over the section, strain the platens' displacement over the
-/// height, lateral strain from the spheres at mid-height on the lateral face.
+/// transits); both are free laterally (frictionless platens). E and nu are
+/// measured as a laboratory does, on gauges over the middle: the axial
+/// strain of the middle half (spheres centred within Rmax of H/4 and 3H/4),
+/// the lateral strain of the surface spheres of the middle third, and the
+/// stress averaged over the gauge from the two platen reactions. The platen
+/// strain (displacement over the height) is also written.
 
 #include "dembridge/dem/assembly.h"
+#include "dembridge/dem/packing.h"
 
 #include <nlohmann/json.hpp>
 #include <string>
@@ -39,6 +43,14 @@ struct SampleConfig
   int frames = 100;                 ///< XDMF frames if the run goes to max_strain
   bool quiet = false;
 };
+
+/// The sample's region: a cylinder of axis z (diameter, height) or a square
+/// prism, from the origin. @throws for another shape.
+dem::Region sample_region(const SampleConfig& cfg);
+
+/// The sample's packing: read from cfg.packing_file, else generated in
+/// sample_region(cfg) with the mean radius, radius ratio and seed.
+dem::Packing sample_packing(const SampleConfig& cfg);
 
 /// Runs the test; returns the summary (particles, links,
 /// mean_links_per_particle, packing_fraction, youngs_modulus_pa,

@@ -114,8 +114,13 @@ double face_gap(const Packing& p, const Region& region, int axis, double value,
 /// One flag per sphere: 1 if its centre lies at least `margin` inside the
 /// region (sdf < -margin), e.g. the bulk for dem::lambda_for_mean_links.
 std::vector<std::uint8_t> inside(const Region& region, std::span<const double> x, double margin);
+/// The bulk of a packing: 1 for the spheres whose centre lies 2 Rmax or more
+/// inside the region (their neighbourhood within lambda (Ra + Rb) is whole
+/// for lambda up to ~1.5). @throws if there is none (region too small).
+std::vector<std::uint8_t> bulk_spheres(const Region& region, std::span<const double> x,
+                                       std::span<const double> r);
 /// Interaction range lambda giving `links_per_sphere` links per sphere on
-/// average in the bulk: over the spheres 2 Rmax or more inside the region
+/// average in the bulk: over the bulk_spheres
 /// (their links to any sphere counted). The spheres at a face miss
 /// neighbours; counting them would raise lambda, the more so the smaller the
 /// sample, and make the bulk of a small sample stiffer than that of a
