@@ -97,6 +97,42 @@ TEST_CASE("compression sample breaks mostly in shear and is stronger than in ten
   CHECK(c["links_broken_shear"].get<std::size_t>() > c["links_broken_tension"].get<std::size_t>());
 }
 
+TEST_CASE("notched tension to separation: fracture energy scales as T^2 / E", "[dem][sample]")
+{
+  // A notch at mid-height (half the section kept) run until the sample is
+  // separated. Scaling T and C0 by k, with the strain rate and the strain
+  // limit, scales every displacement and force by k: the link law (elastic,
+  // softening, Mohr-Coulomb) and the damping are homogeneous of degree 1, so
+  // the dissipated energy scales by k^2. Only the contacts created on the
+  // fly depend on the absolute positions; in tension they barely matter, so
+  // 1e-3 (measured 1e-4).
+  auto a = small("tension");
+  a.ligament = 0.5;
+  a.stop_ratio = 0.01;
+  a.max_strain = 3e-3;
+  auto b = a;
+  b.material.tensile *= 2.0;
+  b.material.cohesion *= 2.0;
+  b.strain_rate *= 2.0;
+  b.max_strain *= 2.0;
+  const auto ra = demo::run_sample(a), rb = demo::run_sample(b);
+  INFO(ra.dump());
+  REQUIRE(ra["separated"].get<bool>());
+  REQUIRE(rb["separated"].get<bool>());
+  const double gf = ra["fracture_energy_j_m2"].get<double>();
+  CHECK(gf > 0.0);
+  CHECK_THAT(rb["fracture_energy_j_m2"].get<double>(), WithinRel(4.0 * gf, 1e-3));
+  CHECK_THAT(rb["peak_stress_pa"].get<double>(), WithinRel(2.0 * ra["peak_stress_pa"].get<double>(), 1e-3));
+  // the stresses and G_f are per ligament area
+  CHECK_THAT(ra["cross_section_m2"].get<double>(), WithinRel(0.5 * M_PI * 0.05 * 0.05 / 4, 1e-12));
+  CHECK_THAT(gf * ra["cross_section_m2"].get<double>(),
+             WithinRel(ra["dissipated_links_j"].get<double>(), 1e-12));
+  CHECK(ra["dissipated_before_peak_j"].get<double>() < ra["dissipated_links_j"].get<double>());
+  // the notch removes the links across the rest of the mid-height section
+  const auto whole = demo::run_sample([&] { auto c = a; c.ligament = 1.0; c.max_strain = 1e-5; return c; }());
+  CHECK(ra["links"].get<std::size_t>() < whole["links"].get<std::size_t>());
+}
+
 TEST_CASE("sample bad input", "[dem][sample][errors]")
 {
   auto c = small("torsion");
@@ -110,6 +146,12 @@ TEST_CASE("sample bad input", "[dem][sample][errors]")
   c = small("tension");
   c.material.phi_i_deg = 95.0;
   CHECK_THROWS_WITH(demo::run_sample(c), Contains("phi_i"));
+  c = small("tension");
+  c.ligament = 0.0;
+  CHECK_THROWS_WITH(demo::run_sample(c), Contains("ligament") && Contains("(0, 1]"));
+  c = small("tension");
+  c.stop_ratio = 1.0;
+  CHECK_THROWS_WITH(demo::run_sample(c), Contains("stop ratio") && Contains("[0, 1)"));
 }
 
 #include "dembridge/dem/output.h"

@@ -52,10 +52,13 @@ int main(int argc, char** argv)
   app.add_option("--softening", m.zeta, "softening factor zeta [-]")->capture_default_str();
   app.add_option("--phi-i", m.phi_i_deg, "internal friction angle [degree]")->capture_default_str();
   app.add_option("--phi-c", m.phi_c_deg, "contact friction angle [degree]")->capture_default_str();
+  app.add_option("--ligament", c.ligament,
+                 "notch at mid-height: the ligament's share of the cross-section, in (0, 1]; 1 = no notch "
+                 "(stresses and fracture energy are then per ligament area)")->capture_default_str();
   app.add_option("--strain-rate", c.strain_rate, "platen strain rate [1/s]")->capture_default_str();
   app.add_option("--max-strain", c.max_strain, "stop at this strain [-]; 0 = 5e-4 tension, 5e-3 compression")
       ->capture_default_str();
-  app.add_option("--stop-ratio", c.stop_ratio, "stop when the stress falls below this x peak [-]")
+  app.add_option("--stop-ratio", c.stop_ratio, "stop when the stress falls below this x peak [-] (tension to separation, for the fracture energy: 0.01 with --max-strain 5e-3)")
       ->capture_default_str();
   app.add_option("--damping", c.damping, "velocity-proportional damping [1/s]; < 0 = automatic")
       ->capture_default_str();

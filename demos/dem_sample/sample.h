@@ -33,6 +33,11 @@ struct SampleConfig
   double links_per_sphere = 12.0;
   dem::Material material;
   std::string test = "tension";     ///< tension | compression
+  /// Circumferential notch at mid-height (cylinder; prism: on all four
+  /// faces): the links crossing z = H/2 outside the ligament are removed.
+  /// The ligament's share of the cross-section, in (0, 1]; 1 = no notch.
+  /// Stresses, fracture energy are then per ligament area.
+  double ligament = 1.0;
   double strain_rate = 0.1;         ///< [1/s], > 0
   double max_strain = 0.0;          ///< stop at this strain; 0 = 5e-4 tension, 5e-3 compression
   double stop_ratio = 0.5;          ///< stop when |stress| falls below this x peak after the peak
@@ -55,7 +60,11 @@ dem::Packing sample_packing(const SampleConfig& cfg);
 /// Runs the test; returns the summary (particles, links,
 /// mean_links_per_particle, packing_fraction, youngs_modulus_pa,
 /// poisson_ratio, peak_stress_pa, strain_at_peak, links_broken_tension,
-/// links_broken_shear, wall_s, ...). Writes DIR/stress_strain.csv and
+/// links_broken_shear, wall_s, ...). A tension test run to separation
+/// (stop_ratio <= 0.02 and max_strain large enough: `separated` is true)
+/// measures the fracture energy `fracture_energy_j_m2`: the energy the links
+/// dissipate (softening, and what is left in a link when it breaks) over the
+/// cross-section; `dissipated_before_peak_j` is its part before the peak. Writes DIR/stress_strain.csv and
 /// DIR/particles.xdmf with an output folder.
 nlohmann::json run_sample(const SampleConfig& cfg);
 
