@@ -2,9 +2,11 @@
 """Plots the stress-strain curves of a calibration (or of dem_sample runs).
 
 Usage: plot_stress_strain.py DIR
-Reads DIR/tension/stress_strain.csv and DIR/compression/stress_strain.csv
-(whichever exist) and writes DIR/tension.png and DIR/compression.png, like
-the paper's Figures 3 and 4 (stress in MPa against strain).
+Reads DIR/tension/stress_strain.csv, DIR/compression/stress_strain.csv and
+DIR/fracture/stress_strain.csv (whichever exist) and writes DIR/tension.png,
+DIR/compression.png (like the paper's Figures 3 and 4: stress in MPa against
+strain) and DIR/fracture.png (the notched test to separation: stress on the
+ligament).
 """
 import csv
 import os
@@ -27,7 +29,9 @@ def curve(path):
 
 def main(folder):
     made = 0
-    for test in ("tension", "compression"):
+    titles = {"tension": "Uniaxial tension", "compression": "Uniaxial compression",
+              "fracture": "Notched tension to separation"}
+    for test in ("tension", "compression", "fracture"):
         path = os.path.join(folder, test, "stress_strain.csv")
         if not os.path.exists(path):
             continue
@@ -35,8 +39,9 @@ def main(folder):
         fig, ax = plt.subplots(figsize=(5, 3.6))
         ax.plot([e * 1e3 for e in eps], sig, "-", lw=1.5, label="DE sample")
         ax.set_xlabel("strain [10$^{-3}$]")
-        ax.set_ylabel(("tensile" if test == "tension" else "compressive") + " stress [MPa]")
-        ax.set_title("Uniaxial " + test)
+        ax.set_ylabel({"tension": "tensile stress [MPa]", "compression": "compressive stress [MPa]",
+                       "fracture": "stress on the ligament [MPa]"}[test])
+        ax.set_title(titles[test])
         ax.grid(alpha=0.3)
         ax.legend()
         fig.tight_layout()

@@ -82,6 +82,28 @@ TEST_CASE("full identification: strengths within 5 %, file read back by the demo
   CHECK(t["peak_stress_pa"].get<double>() == a["tensile_strength_pa"].get<double>());
 }
 
+TEST_CASE("fracture energy identified through zeta, strengths kept", "[calibrate]")
+{
+  // G_f of the notched test to separation. The secant stops when
+  // G_f / sigma_t^2 is within 5 % (tol_fracture); the final rescale of T and
+  // C0 scales G_f by k^2 and sigma_t by k exactly, so G_f is within 5 % of
+  // the target up to the rescaled sigma_t's own error (sigma_t within 1 %
+  // of its target after the rescale: (1.01)^2): 7 %.
+  auto c = small();
+  c.target.fracture_energy = 60.0; // the default zeta (10) gives ~54 J/m^2 here
+  const auto r = demo::identify(c);
+  INFO(r.achieved.dump());
+  const auto& a = r.achieved;
+  CHECK(std::abs(a["fracture_energy_j_m2"].get<double>() / 60.0 - 1.0) < 0.07);
+  CHECK(r.file.material.zeta != 10.0);
+  CHECK(r.fracture["separated"].get<bool>());
+  // the strengths still within the issue's 5 %
+  CHECK(std::abs(a["tensile_strength_pa"].get<double>() / 3.0e6 - 1.0) < 0.05);
+  CHECK(std::abs(a["compressive_strength_pa"].get<double>() / 16.5e6 - 1.0) < 0.05);
+  CHECK(std::abs(a["youngs_modulus_pa"].get<double>() / 30e9 - 1.0) < 0.02);
+  CHECK(r.file.calibration["method"].get<std::string>().find("zeta") != std::string::npos);
+}
+
 TEST_CASE("unreachable targets are refused with the reachable range", "[calibrate][errors]")
 {
   auto c = small();
@@ -92,6 +114,17 @@ TEST_CASE("unreachable targets are refused with the reachable range", "[calibrat
   c.target.compressive_strength = 2e6;
   c.target.tensile_strength = 3e6;
   CHECK_THROWS_WITH(demo::identify(c), Contains("sigma_c/sigma_t") && Contains("reachable range"));
+  // G_f far above what zeta in [1, 20] gives on 4 mm spheres (~20-70 J/m^2)
+  c = small();
+  c.target.fracture_energy = 500.0;
+  CHECK_THROWS_WITH(demo::identify(c), Contains("fracture energy") && Contains("reachable range")
+                                           && Contains("zeta from 1 to 20"));
+  c = small();
+  c.target.fracture_energy = -1.0;
+  CHECK_THROWS_WITH(demo::identify(c), Contains("fracture energy") && Contains("> 0"));
+  c.target.fracture_energy = 60.0;
+  c.elastic_only = true;
+  CHECK_THROWS_WITH(demo::identify(c), Contains("fracture energy") && Contains("elastic-only"));
   const auto bad = std::filesystem::temp_directory_path() / "dembridge_bad_material.json";
   std::ofstream(bad) << R"({"format": "dembridge-material-1", "youngs_modulus_pa": 3e10})";
   CHECK_THROWS_WITH(dem::read_material(bad), Contains("poisson_ratio"));

@@ -108,7 +108,7 @@ TEST_CASE("notched tension to separation: fracture energy scales as T^2 / E", "[
   // 1e-3 (measured 1e-4).
   auto a = small("tension");
   a.ligament = 0.5;
-  a.stop_ratio = 0.01;
+  a.to_separation = true;
   a.max_strain = 3e-3;
   auto b = a;
   b.material.tensile *= 2.0;
@@ -130,6 +130,7 @@ TEST_CASE("notched tension to separation: fracture energy scales as T^2 / E", "[
   CHECK(ra["dissipated_before_peak_j"].get<double>() < ra["dissipated_links_j"].get<double>());
   // the notch removes the links across the rest of the mid-height section
   const auto whole = demo::run_sample([&] { auto c = a; c.ligament = 1.0; c.max_strain = 1e-5; return c; }());
+  CHECK_FALSE(whole["separated"].get<bool>());
   CHECK(ra["links"].get<std::size_t>() < whole["links"].get<std::size_t>());
 }
 
@@ -152,6 +153,9 @@ TEST_CASE("sample bad input", "[dem][sample][errors]")
   c = small("tension");
   c.stop_ratio = 1.0;
   CHECK_THROWS_WITH(demo::run_sample(c), Contains("stop ratio") && Contains("[0, 1)"));
+  c = small("compression");
+  c.to_separation = true;
+  CHECK_THROWS_WITH(demo::run_sample(c), Contains("separation") && Contains("compression"));
 }
 
 #include "dembridge/dem/output.h"

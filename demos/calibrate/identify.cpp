@@ -2,8 +2,12 @@
 
 #include "dembridge/dem/packing.h"
 
+#include <algorithm>
 #include <cmath>
+#include <tuple>
+#include <vector>
 #include <iostream>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <unistd.h>
@@ -14,9 +18,14 @@ namespace
 {
 struct Runner
 {
+  explicit Runner(const IdentifyConfig& c) : cfg(c) {}
   IdentifyConfig cfg;
   nlohmann::json history = nlohmann::json::array();
+  /// results of runs without output, by test and material: the runs are
+  /// deterministic, so a repeated one is not simulated again
+  std::map<std::string, nlohmann::json> done;
 
+  /// test: tension | compression | fracture (notched tension to separation)
   nlohmann::json run(const dem::Material& m, const std::string& test, bool elastic,
                      const std::string& out = "")
   {
@@ -30,18 +39,42 @@ struct Runner
       s.material.tensile = s.material.cohesion = 1e12; // no breakage
       s.max_strain = 5e-5;
     }
+    if (test == "fracture")
+    {
+      s.test = "tension";
+      s.ligament = cfg.ligament;
+      s.to_separation = true;
+      s.max_strain = 0.0; // 5e-3
+    }
+    std::ostringstream key;
+    key.precision(17);
+    key << test << ' ' << elastic << ' ' << m.youngs_modulus << ' ' << m.poisson_ratio << ' ' << m.density
+        << ' ' << m.micro.alpha << ' ' << m.micro.beta << ' ' << m.micro.gamma << ' ' << m.tensile << ' '
+        << m.cohesion << ' ' << m.zeta << ' ' << m.phi_i_deg << ' ' << m.phi_c_deg;
+    if (out.empty())
+      if (auto it = done.find(key.str()); it != done.end())
+        return it->second;
     auto r = run_sample(s);
+    if (out.empty())
+      done[key.str()] = r;
+    if (test == "fracture" && !r["separated"].get<bool>())
+      throw std::runtime_error("the notched sample did not separate by a strain of "
+                               + std::to_string(r["final_strain"].get<double>())
+                               + " (zeta = " + std::to_string(m.zeta) + "): no fracture energy");
     nlohmann::json h = {{"test", elastic ? "elastic " + test : test},
                         {"alpha", m.micro.alpha},
                         {"beta", m.micro.beta},
                         {"gamma", m.micro.gamma},
                         {"tensile_strength_pa", m.tensile},
                         {"cohesion_pa", m.cohesion},
+                        {"softening", m.zeta},
                         {"youngs_modulus_pa", r["youngs_modulus_pa"]},
                         {"poisson_ratio", r["poisson_ratio"]},
                         {"peak_stress_pa", r["peak_stress_pa"]},
                         {"particles", r["particles"]},
                         {"wall_s", r["wall_s"]}};
+    if (test == "fracture")
+      h["fracture_energy_j_m2"] = r["fracture_energy_j_m2"];
     history.push_back(h);
     if (!cfg.quiet)
       std::cout << "  " << h.dump() << std::endl;
@@ -117,6 +150,83 @@ nlohmann::json compare(const nlohmann::json& a, const nlohmann::json& ref, doubl
     << lo << ", " << hi << "] (" << why << ")";
   throw std::runtime_error(s.str());
 }
+
+/// C0/T for the targets' sigma_c/sigma_t at m's zeta (regula falsi on
+/// log(C0/T)); returns C0/T and sigma_t measured at T = target sigma_t.
+/// rho_guess > 0: bracket [rho_guess / 1.25, 1.25 rho_guess] first, the whole
+/// range [0.3, 30] if it does not hold the target.
+std::pair<double, double> solve_ratio(Runner& R, const dem::Material& m, const Targets& t, double tol,
+                                      double rho_guess)
+{
+  const double ratio_target = t.compressive_strength / t.tensile_strength;
+  auto strengths = [&](double rho)
+  {
+    dem::Material q = m;
+    q.tensile = t.tensile_strength; // scale is irrelevant for the ratio
+    q.cohesion = rho * q.tensile;
+    const double st = R.run(q, "tension", false)["peak_stress_pa"].get<double>();
+    const double sc = R.run(q, "compression", false)["peak_stress_pa"].get<double>();
+    return std::pair{st, sc};
+  };
+  double r_lo = 0.3, r_hi = 30.0;
+  double st_lo = 0.0, sc_lo = 0.0, st_hi = 0.0, sc_hi = 0.0;
+  bool bracketed = false;
+  if (rho_guess > 0.0)
+  {
+    r_lo = std::max(0.3, rho_guess / 1.25);
+    r_hi = std::min(30.0, 1.25 * rho_guess);
+    std::tie(st_lo, sc_lo) = strengths(r_lo);
+    std::tie(st_hi, sc_hi) = strengths(r_hi);
+    bracketed = sc_lo / st_lo <= ratio_target && ratio_target <= sc_hi / st_hi;
+  }
+  if (!bracketed)
+  {
+    r_lo = 0.3, r_hi = 30.0;
+    std::tie(st_lo, sc_lo) = strengths(r_lo);
+    std::tie(st_hi, sc_hi) = strengths(r_hi);
+  }
+  double q_lo = sc_lo / st_lo, q_hi = sc_hi / st_hi;
+  if (ratio_target < q_lo || ratio_target > q_hi)
+    unreachable("sigma_c/sigma_t", ratio_target, q_lo, q_hi,
+                "C0/T from 0.3 to 30 at zeta = " + std::to_string(m.zeta));
+  // regula falsi on log(C0/T) with the Illinois modification (the end
+  // kept twice in a row has its residual halved), bisection when the
+  // secant leaves the inner 90 % of the bracket (the ratio is nearly
+  // linear in log(C0/T): one pair of tests on the default sample where
+  // bisection took 6)
+  double rho = r_lo, st = st_lo;
+  double f_lo = q_lo - ratio_target, f_hi = q_hi - ratio_target;
+  int kept = 0; // +1: the low end was kept last time, -1: the high end
+  for (int it = 0; it < 20; ++it)
+  {
+    const double x_lo = std::log(r_lo), x_hi = std::log(r_hi);
+    double x = x_lo - f_lo * (x_hi - x_lo) / (f_hi - f_lo);
+    if (!(x > x_lo + 0.05 * (x_hi - x_lo) && x < x_hi - 0.05 * (x_hi - x_lo)))
+      x = 0.5 * (x_lo + x_hi);
+    const double r = std::exp(x);
+    auto [a, b] = strengths(r);
+    rho = r;
+    st = a;
+    const double q = b / a;
+    if (std::abs(q / ratio_target - 1.0) < tol)
+      break;
+    if (q < ratio_target)
+    {
+      r_lo = r, f_lo = q - ratio_target;
+      if (kept == -1)
+        f_hi *= 0.5;
+      kept = -1;
+    }
+    else
+    {
+      r_hi = r, f_hi = q - ratio_target;
+      if (kept == 1)
+        f_lo *= 0.5;
+      kept = 1;
+    }
+  }
+  return {rho, st};
+}
 } // namespace
 
 IdentifyResult identify(const IdentifyConfig& cfg0)
@@ -140,6 +250,15 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
       unreachable("sigma_c/sigma_t", t.compressive_strength / t.tensile_strength, 1.0, 1e300,
                   "a DE concrete is stronger in compression than in tension");
   }
+  if (t.fracture_energy < 0.0 || !std::isfinite(t.fracture_energy))
+    throw std::runtime_error("target fracture energy " + std::to_string(t.fracture_energy)
+                             + " J/m^2: must be > 0 (0: not a target)");
+  if (t.fracture_energy > 0.0 && (cfg.elastic_only || cfg.given_local_strengths))
+    throw std::runtime_error("a target fracture energy needs the strengths identified too (not with "
+                             "elastic-only or given T and C0)");
+  if (t.fracture_energy > 0.0 && !(cfg.zeta_min > 0.0 && cfg.zeta_min < cfg.zeta_max))
+    throw std::runtime_error("zeta range [" + std::to_string(cfg.zeta_min) + ", " + std::to_string(cfg.zeta_max)
+                             + "]: needs 0 < zeta_min < zeta_max");
   if (cfg.checks && !cfg.sample.packing_file.empty())
     throw std::runtime_error("the checks generate a second packing and a larger sample: they need the "
                              "sample's generator settings, not a packing file (" + cfg.sample.packing_file + ")");
@@ -207,56 +326,67 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
   else if (!cfg.elastic_only)
   {
     // 3. C0/T for sigma_c/sigma_t, then the common scale for sigma_t
-    const double ratio_target = t.compressive_strength / t.tensile_strength;
-    auto strengths = [&](double rho)
+    auto [rho, st] = solve_ratio(R, m, t, cfg.tol_strength, 0.0);
+    if (t.fracture_energy > 0.0)
     {
-      dem::Material q = m;
-      q.tensile = t.tensile_strength; // scale is irrelevant for the ratio
-      q.cohesion = rho * q.tensile;
-      const double st = R.run(q, "tension", false)["peak_stress_pa"].get<double>();
-      const double sc = R.run(q, "compression", false)["peak_stress_pa"].get<double>();
-      return std::pair{st, sc};
-    };
-    double r_lo = 0.3, r_hi = 30.0;
-    auto [st_lo, sc_lo] = strengths(r_lo);
-    auto [st_hi, sc_hi] = strengths(r_hi);
-    double q_lo = sc_lo / st_lo, q_hi = sc_hi / st_hi;
-    if (ratio_target < q_lo || ratio_target > q_hi)
-      unreachable("sigma_c/sigma_t", ratio_target, q_lo, q_hi, "C0/T from 0.3 to 30");
-    // regula falsi on log(C0/T) with the Illinois modification (the end
-    // kept twice in a row has its residual halved), bisection when the
-    // secant leaves the inner 90 % of the bracket (the ratio is nearly
-    // linear in log(C0/T): one pair of tests on the default sample where
-    // bisection took 6)
-    double rho = r_lo, st = st_lo;
-    double f_lo = q_lo - ratio_target, f_hi = q_hi - ratio_target;
-    int kept = 0; // +1: the low end was kept last time, -1: the high end
-    for (int it = 0; it < 20; ++it)
-    {
-      const double x_lo = std::log(r_lo), x_hi = std::log(r_hi);
-      double x = x_lo - f_lo * (x_hi - x_lo) / (f_hi - f_lo);
-      if (!(x > x_lo + 0.05 * (x_hi - x_lo) && x < x_hi - 0.05 * (x_hi - x_lo)))
-        x = 0.5 * (x_lo + x_hi);
-      const double r = std::exp(x);
-      auto [a, b] = strengths(r);
-      rho = r;
-      st = a;
-      const double q = b / a;
-      if (std::abs(q / ratio_target - 1.0) < cfg.tol_strength)
-        break;
-      if (q < ratio_target)
+      // 4. zeta for G_f / sigma_t^2 (scale-free), then 3. again
+      const double l_target = t.fracture_energy / (t.tensile_strength * t.tensile_strength);
+      std::vector<std::pair<double, double>> pts; // (log zeta, log l) at this C0/T
+      double zeta = std::clamp(m.zeta, cfg.zeta_min, cfg.zeta_max);
+      auto l_at = [&](double z)
       {
-        r_lo = r, f_lo = q - ratio_target;
-        if (kept == -1)
-          f_hi *= 0.5;
-        kept = -1;
-      }
-      else
+        dem::Material q = m;
+        q.zeta = z;
+        q.tensile = t.tensile_strength;
+        q.cohesion = rho * q.tensile;
+        const double s_t = R.run(q, "tension", false)["peak_stress_pa"].get<double>();
+        const double gf = R.run(q, "fracture", false)["fracture_energy_j_m2"].get<double>();
+        return gf / (s_t * s_t);
+      };
+      bool converged = false;
+      for (int round = 0; round < 3 && !converged; ++round)
       {
-        r_hi = r, f_hi = q - ratio_target;
-        if (kept == 1)
-          f_lo *= 0.5;
-        kept = 1;
+        pts.clear();
+        for (int it = 0; it < 6; ++it)
+        {
+          const double l = l_at(zeta);
+          pts.emplace_back(std::log(zeta), std::log(l));
+          if (std::abs(l / l_target - 1.0) < cfg.tol_fracture)
+            break;
+          // secant on the last two points; l ~ zeta^0.5 at first (measured
+          // 0.3-0.6 between zeta 3 and 20) or if the points disagree
+          double p = 0.5;
+          if (pts.size() >= 2)
+          {
+            const auto& [x1, y1] = pts[pts.size() - 2];
+            const auto& [x2, y2] = pts.back();
+            if (std::abs(x2 - x1) > 1e-6 && (y2 - y1) / (x2 - x1) > 0.1)
+              p = (y2 - y1) / (x2 - x1);
+          }
+          const double next = std::clamp(zeta * std::pow(l_target / l, 1.0 / p), cfg.zeta_min, cfg.zeta_max);
+          if (std::abs(std::log(next / zeta)) < 1e-3) // at a bound, and it asks for more
+          {
+            const double other = next == cfg.zeta_max ? cfg.zeta_min : cfg.zeta_max;
+            const double l2 = l_at(other);
+            const double k2 = t.tensile_strength * t.tensile_strength;
+            std::ostringstream why;
+            why << "zeta from " << cfg.zeta_min << " to " << cfg.zeta_max << " at C0/T = " << rho
+                << ", sigma_t = " << t.tensile_strength << " Pa, on spheres of mean radius "
+                << cfg.sample.mean_radius << " m: G_f grows with the sphere size";
+            unreachable("fracture energy G_f [J/m^2]", t.fracture_energy, std::min(l, l2) * k2,
+                        std::max(l, l2) * k2, why.str());
+          }
+          zeta = next;
+        }
+        const bool moved = zeta != m.zeta;
+        m.zeta = zeta;
+        if (round > 0 && !moved) // l holds at the C0/T solved for this zeta
+          break;
+        const double rho_before = rho;
+        std::tie(rho, st) = solve_ratio(R, m, t, cfg.tol_strength, rho);
+        // C0/T moved little: the last l still holds
+        converged = std::abs(std::log(rho / rho_before)) < 0.02
+                    && std::abs(std::exp(pts.back().second) / l_target - 1.0) < cfg.tol_fracture;
       }
     }
     // homogeneity: scaling T and C0 by k scales sigma_t by k
@@ -269,6 +399,11 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
   auto out = [&](const char* name)
   { return cfg.output_dir.empty() ? std::string() : (std::filesystem::path(cfg.output_dir) / name).string(); };
   res.achieved = measure(R, m, cfg.elastic_only, &res.tension, &res.compression, out("tension"), out("compression"));
+  if (t.fracture_energy > 0.0)
+  {
+    res.fracture = R.run(m, "fracture", false, out("fracture"));
+    res.achieved["fracture_energy_j_m2"] = res.fracture["fracture_energy_j_m2"];
+  }
   if (cfg.checks)
   {
     if (!cfg.quiet)
@@ -316,6 +451,11 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
   res.file.calibration = {{"method", cfg.given_local_strengths
                                          ? "demos/calibrate: secant on alpha for nu, beta for E; "
                                            "T and C0 given, sigma_t and sigma_c measured"
+                                         : t.fracture_energy > 0.0
+                                         ? "demos/calibrate: secant on alpha for nu, beta for E, "
+                                           "regula falsi on log(C0/T) for sigma_c/sigma_t, secant on "
+                                           "log zeta for G_f/sigma_t^2 (notched tension to separation), "
+                                           "rescale for sigma_t"
                                          : "demos/calibrate: secant on alpha for nu, beta for E, "
                                            "regula falsi on log(C0/T) for sigma_c/sigma_t, rescale for sigma_t"},
                           {"sample", {{"shape", cfg.sample.shape},

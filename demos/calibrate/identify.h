@@ -17,8 +17,18 @@
 ///    scales every peak stress. So sigma_c/sigma_t depends only on C0/T
 ///    (zeta, phi_i, phi_c fixed): regula falsi (Illinois) on log(C0/T) for the ratio,
 ///    then one exact rescale for sigma_t, then a check run.
+/// 4. Fracture energy (optional): G_f scales as k^2 when T and C0 scale by
+///    k, so l = G_f / sigma_t^2 (E l is the characteristic length
+///    E G_f / sigma_t^2) depends only on zeta and C0/T. A secant on
+///    (log zeta, log l) at the current C0/T, then 3. again at the new zeta;
+///    repeated until both hold. G_f is measured on the same packing with
+///    a notch at mid-height (half the section kept), in tension until the
+///    sample is separated: without a notch much of the dissipation is
+///    spread through the volume before the peak and G_f grows with the
+///    sample's height.
 /// Unreachable targets (nu outside the packing's range, sigma_c/sigma_t
 /// outside the range C0/T in [0.3, 30] gives) stop with the reachable range.
+/// G_f outside what zeta in [zeta_min, zeta_max] gives stops in the same way.
 
 #include "dembridge/dem/material_file.h"
 #include "sample.h"
@@ -36,6 +46,9 @@ struct Targets
   double tensile_strength = 3.0e6;     ///< sigma_t [Pa]
   double compressive_strength = 16.5e6; ///< sigma_c [Pa]
   double density = 2400.0;             ///< [kg/m^3]
+  /// G_f [J/m^2] of the notched tension test to separation (see
+  /// IdentifyConfig::ligament); 0: not a target, zeta kept.
+  double fracture_energy = 0.0;
 };
 
 /// The default calibration sample: a 15 x 30 cm cylinder of spheres of mean
@@ -70,6 +83,16 @@ struct IdentifyConfig
   dem::Material fixed;           ///< zeta, phi_i, phi_c kept; the rest identified
   double tol_elastic = 0.005;    ///< relative on E, absolute on nu
   double tol_strength = 0.01;    ///< relative on sigma_c / sigma_t
+  double tol_fracture = 0.05;    ///< relative on G_f / sigma_t^2
+  /// zeta is searched in [zeta_min, zeta_max] when G_f is a target. Above
+  /// about 20 (measured on the 400-sphere and the default samples) the
+  /// links of the crack fail in shear before their softening ends and G_f
+  /// stops growing with zeta.
+  double zeta_min = 1.0, zeta_max = 20.0;
+  /// The fracture test: the identification sample with a notch at
+  /// mid-height that keeps this share of the section, in tension until
+  /// separated; G_f = energy dissipated by the links / ligament area.
+  double ligament = 0.5;
   bool elastic_only = false;
   /// The paper's way: T and C0 given (fixed.tensile, fixed.cohesion), only
   /// alpha, beta, gamma identified; the strengths they give are measured
@@ -91,6 +114,7 @@ struct IdentifyResult
   nlohmann::json achieved;       ///< E, nu, sigma_t, sigma_c measured with them
   nlohmann::json history;        ///< every simulated test
   nlohmann::json tension, compression; ///< summaries of the final tests
+  nlohmann::json fracture;       ///< the final notched test (with a G_f target)
   /// With IdentifyConfig::checks: "half_rate", "second_packing",
   /// "larger_sample", each with `achieved`, the relative (nu: absolute)
   /// `difference` from the identification sample's values, and `within`

@@ -32,7 +32,19 @@ int main(int argc, char** argv)
   app.add_option("--compressive-strength", t.compressive_strength,
                  "target compressive strength sigma_c [Pa]")->capture_default_str();
   app.add_option("--density", t.density, "bulk density [kg/m^3]")->capture_default_str();
-  app.add_option("--softening", c.fixed.zeta, "softening factor zeta (kept) [-]")->capture_default_str();
+  app.add_option("--fracture-energy", t.fracture_energy,
+                 "target fracture energy G_f [J/m^2] of the notched tension test; 0 = none (zeta kept)")
+      ->capture_default_str();
+  app.add_option("--softening", c.fixed.zeta, "softening factor zeta (kept; with --fracture-energy the start) [-]")
+      ->capture_default_str();
+  app.add_option("--softening-min", c.zeta_min, "with --fracture-energy: smallest zeta tried [-]")
+      ->capture_default_str();
+  app.add_option("--softening-max", c.zeta_max,
+                 "with --fracture-energy: largest zeta tried [-] (above ~20 G_f stops growing)")
+      ->capture_default_str();
+  app.add_option("--ligament", c.ligament,
+                 "fracture test: share of the section the mid-height notch keeps, in (0, 1]")
+      ->capture_default_str();
   app.add_option("--phi-i", c.fixed.phi_i_deg, "internal friction angle (kept) [degree]")->capture_default_str();
   app.add_option("--phi-c", c.fixed.phi_c_deg, "contact friction angle (kept) [degree]")->capture_default_str();
   app.add_option("--shape", s.shape, "sample: cylinder | prism")->capture_default_str();
@@ -48,6 +60,8 @@ int main(int argc, char** argv)
   app.add_option("--tolerance-elastic", c.tol_elastic, "tolerance on E (relative) and nu (absolute)")
       ->capture_default_str();
   app.add_option("--tolerance-strength", c.tol_strength, "relative tolerance on sigma_c/sigma_t")
+      ->capture_default_str();
+  app.add_option("--tolerance-fracture", c.tol_fracture, "relative tolerance on G_f / sigma_t^2")
       ->capture_default_str();
   app.add_flag("--elastic-only", c.elastic_only, "identify alpha, beta, gamma only");
   app.add_flag("--checks", c.checks,
@@ -88,6 +102,8 @@ int main(int argc, char** argv)
     {
       out["target"]["tensile_strength_pa"] = t.tensile_strength;
       out["target"]["compressive_strength_pa"] = t.compressive_strength;
+      if (t.fracture_energy > 0.0)
+        out["target"]["fracture_energy_j_m2"] = t.fracture_energy;
     }
     out["achieved"] = r.achieved;
     out["parameters"] = {{"alpha", m.micro.alpha}, {"beta", m.micro.beta}, {"gamma", m.micro.gamma},

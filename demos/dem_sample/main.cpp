@@ -58,8 +58,11 @@ int main(int argc, char** argv)
   app.add_option("--strain-rate", c.strain_rate, "platen strain rate [1/s]")->capture_default_str();
   app.add_option("--max-strain", c.max_strain, "stop at this strain [-]; 0 = 5e-4 tension, 5e-3 compression")
       ->capture_default_str();
-  app.add_option("--stop-ratio", c.stop_ratio, "stop when the stress falls below this x peak [-] (tension to separation, for the fracture energy: 0.01 with --max-strain 5e-3)")
+  app.add_option("--stop-ratio", c.stop_ratio, "stop when the stress falls below this x peak [-]")
       ->capture_default_str();
+  app.add_flag("--to-separation", c.to_separation,
+               "tension until separated: the force through the crack below 1 % of the peak (fracture energy; "
+               "--max-strain 0 then means 5e-3)");
   app.add_option("--damping", c.damping, "velocity-proportional damping [1/s]; < 0 = automatic")
       ->capture_default_str();
   app.add_option("--dt", c.dt, "time step [s]; 0 = safety factor x critical")->capture_default_str();

@@ -41,6 +41,11 @@ struct SampleConfig
   double strain_rate = 0.1;         ///< [1/s], > 0
   double max_strain = 0.0;          ///< stop at this strain; 0 = 5e-4 tension, 5e-3 compression
   double stop_ratio = 0.5;          ///< stop when |stress| falls below this x peak after the peak
+  /// Tension until the sample is separated (the force through the crack,
+  /// on the bottom platen, stays below 1 % of the peak for two periods of
+  /// the first axial mode), for the fracture energy; stop_ratio is then not
+  /// used and max_strain = 0 means 5e-3.
+  bool to_separation = false;
   double damping = -1.0;            ///< [1/s]; < 0 = first axial circular frequency of the sample
   double dt = 0.0;                  ///< [s]; 0 = safety x critical
   double safety = 0.9;
@@ -61,7 +66,7 @@ dem::Packing sample_packing(const SampleConfig& cfg);
 /// mean_links_per_particle, packing_fraction, youngs_modulus_pa,
 /// poisson_ratio, peak_stress_pa, strain_at_peak, links_broken_tension,
 /// links_broken_shear, wall_s, ...). A tension test run to separation
-/// (stop_ratio <= 0.02 and max_strain large enough: `separated` is true)
+/// (to_separation, and max_strain large enough: `separated` is true)
 /// measures the fracture energy `fracture_energy_j_m2`: the energy the links
 /// dissipate (softening, and what is left in a link when it breaks) over the
 /// cross-section; `dissipated_before_peak_j` is its part before the peak. Writes DIR/stress_strain.csv and
