@@ -153,10 +153,12 @@ nlohmann::json compare(const nlohmann::json& a, const nlohmann::json& ref, doubl
 
 /// C0/T for the targets' sigma_c/sigma_t at m's zeta (regula falsi on
 /// log(C0/T)); returns C0/T and sigma_t measured at T = target sigma_t.
-/// rho_guess > 0: bracket [rho_guess / 1.25, 1.25 rho_guess] first, the whole
-/// range [0.3, 30] if it does not hold the target.
+/// rho_guess > 0 (a solution at a nearby zeta) with *slope (d ratio / d
+/// log(C0/T) there): secant steps from it first (at most a factor 2 each),
+/// the whole range [0.3, 30] if three do not bracket the target. *slope is
+/// set to the slope of the last bracket.
 std::pair<double, double> solve_ratio(Runner& R, const dem::Material& m, const Targets& t, double tol,
-                                      double rho_guess)
+                                      double rho_guess, double* slope)
 {
   const double ratio_target = t.compressive_strength / t.tensile_strength;
   auto strengths = [&](double rho)
@@ -171,13 +173,35 @@ std::pair<double, double> solve_ratio(Runner& R, const dem::Material& m, const T
   double r_lo = 0.3, r_hi = 30.0;
   double st_lo = 0.0, sc_lo = 0.0, st_hi = 0.0, sc_hi = 0.0;
   bool bracketed = false;
-  if (rho_guess > 0.0)
+  if (rho_guess > 0.0 && *slope > 0.0)
   {
-    r_lo = std::max(0.3, rho_guess / 1.25);
-    r_hi = std::min(30.0, 1.25 * rho_guess);
-    std::tie(st_lo, sc_lo) = strengths(r_lo);
-    std::tie(st_hi, sc_hi) = strengths(r_hi);
-    bracketed = sc_lo / st_lo <= ratio_target && ratio_target <= sc_hi / st_hi;
+    double x = std::log(rho_guess), sl = *slope;
+    auto [st, sc] = strengths(rho_guess);
+    if (std::abs(sc / st / ratio_target - 1.0) < tol)
+      return {rho_guess, st};
+    for (int it = 0; it < 3 && !bracketed; ++it)
+    {
+      const double q = sc / st;
+      const double step = std::clamp((ratio_target - q) / sl, -std::log(2.0), std::log(2.0));
+      const double xn = std::clamp(x + step, std::log(0.3), std::log(30.0));
+      if (std::abs(xn - x) < 1e-9)
+        break;
+      auto [stn, scn] = strengths(std::exp(xn));
+      const double qn = scn / stn;
+      if (std::abs(qn / ratio_target - 1.0) < tol)
+        return {std::exp(xn), stn};
+      if ((q - ratio_target) * (qn - ratio_target) < 0.0)
+      {
+        bracketed = true;
+        const bool up = xn > x;
+        r_lo = std::exp(up ? x : xn), r_hi = std::exp(up ? xn : x);
+        st_lo = up ? st : stn, sc_lo = up ? sc : scn;
+        st_hi = up ? stn : st, sc_hi = up ? scn : sc;
+      }
+      if ((qn - q) / (xn - x) > 0.0)
+        sl = (qn - q) / (xn - x);
+      x = xn, st = stn, sc = scn;
+    }
   }
   if (!bracketed)
   {
@@ -196,6 +220,7 @@ std::pair<double, double> solve_ratio(Runner& R, const dem::Material& m, const T
   // bisection took 6)
   double rho = r_lo, st = st_lo;
   double f_lo = q_lo - ratio_target, f_hi = q_hi - ratio_target;
+  double q_lo_raw = q_lo, q_hi_raw = q_hi; // without the Illinois halving
   int kept = 0; // +1: the low end was kept last time, -1: the high end
   for (int it = 0; it < 20; ++it)
   {
@@ -212,19 +237,20 @@ std::pair<double, double> solve_ratio(Runner& R, const dem::Material& m, const T
       break;
     if (q < ratio_target)
     {
-      r_lo = r, f_lo = q - ratio_target;
+      r_lo = r, f_lo = q - ratio_target, q_lo_raw = q;
       if (kept == -1)
         f_hi *= 0.5;
       kept = -1;
     }
     else
     {
-      r_hi = r, f_hi = q - ratio_target;
+      r_hi = r, f_hi = q - ratio_target, q_hi_raw = q;
       if (kept == 1)
         f_lo *= 0.5;
       kept = 1;
     }
   }
+  *slope = (q_hi_raw - q_lo_raw) / (std::log(r_hi) - std::log(r_lo));
   return {rho, st};
 }
 } // namespace
@@ -326,7 +352,8 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
   else if (!cfg.elastic_only)
   {
     // 3. C0/T for sigma_c/sigma_t, then the common scale for sigma_t
-    auto [rho, st] = solve_ratio(R, m, t, cfg.tol_strength, 0.0);
+    double slope = 0.0; // d(sigma_c/sigma_t) / d log(C0/T), from the last solve
+    auto [rho, st] = solve_ratio(R, m, t, cfg.tol_strength, 0.0, &slope);
     if (t.fracture_energy > 0.0)
     {
       // 4. zeta for G_f / sigma_t^2 (scale-free), then 3. again
@@ -382,11 +409,9 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
         m.zeta = zeta;
         if (round > 0 && !moved) // l holds at the C0/T solved for this zeta
           break;
-        const double rho_before = rho;
-        std::tie(rho, st) = solve_ratio(R, m, t, cfg.tol_strength, rho);
-        // C0/T moved little: the last l still holds
-        converged = std::abs(std::log(rho / rho_before)) < 0.02
-                    && std::abs(std::exp(pts.back().second) / l_target - 1.0) < cfg.tol_fracture;
+        std::tie(rho, st) = solve_ratio(R, m, t, cfg.tol_strength, rho, &slope);
+        // l again at the new C0/T (its tension test is the solve's last)
+        converged = std::abs(l_at(zeta) / l_target - 1.0) < cfg.tol_fracture;
       }
     }
     // homogeneity: scaling T and C0 by k scales sigma_t by k
