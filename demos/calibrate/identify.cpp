@@ -4,13 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <tuple>
-#include <vector>
 #include <iostream>
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 #include <unistd.h>
+#include <vector>
 
 namespace dembridge::demo
 {

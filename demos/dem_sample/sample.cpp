@@ -98,6 +98,8 @@ nlohmann::json run_sample(const SampleConfig& cfg)
     throw std::runtime_error("safety factor " + std::to_string(cfg.safety) + ": must be in (0, 1]");
   if (!(cfg.stop_ratio >= 0.0 && cfg.stop_ratio < 1.0))
     throw std::runtime_error("stop ratio " + std::to_string(cfg.stop_ratio) + ": must be in [0, 1)");
+  if (cfg.to_separation && cfg.test != "tension")
+    throw std::runtime_error("a run to separation is a tension test, not " + cfg.test);
   if (cfg.dt < 0.0)
     throw std::runtime_error("time step " + std::to_string(cfg.dt) + " s: must be > 0 (0: automatic)");
   cfg.material.validate();
@@ -150,8 +152,6 @@ nlohmann::json run_sample(const SampleConfig& cfg)
   const double omega1 = std::numbers::pi / (2.0 * H) * c_wave;
   const double damping = cfg.damping >= 0.0 ? cfg.damping : omega1;
   const double sign = cfg.test == "tension" ? 1.0 : -1.0;
-  if (cfg.to_separation && cfg.test != "tension")
-    throw std::runtime_error("a run to separation is a tension test, not " + cfg.test);
   const double max_strain = cfg.max_strain > 0.0 ? cfg.max_strain
                                                  : (cfg.test == "tension" && !cfg.to_separation ? 5e-4 : 5e-3);
   const double v_top = sign * cfg.strain_rate * H;
