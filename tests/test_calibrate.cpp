@@ -84,8 +84,9 @@ TEST_CASE("full identification: strengths within 5 %, file read back by the demo
 
 TEST_CASE("fracture energy identified through zeta, strengths kept", "[calibrate]")
 {
-  // G_f of the notched test to separation. The secant stops when
-  // G_f / sigma_t^2 is within 5 % (tol_fracture); the final rescale of T and
+  // G_f of the notched test to separation. The Broyden iteration on (zeta,
+  // C0/T) stops when G_f / sigma_t^2 is within 5 % (tol_fracture) and
+  // sigma_c / sigma_t within 1 %; the final rescale of T and
   // C0 scales G_f by k^2 and sigma_t by k exactly, so G_f is within 5 % of
   // the target up to the rescaled sigma_t's own error (sigma_t within 1 %
   // of its target after the rescale: (1.01)^2): 7 %.

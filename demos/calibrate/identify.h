@@ -19,9 +19,12 @@
 ///    then one exact rescale for sigma_t, then a check run.
 /// 4. Fracture energy (optional): G_f scales as k^2 when T and C0 scale by
 ///    k, so l = G_f / sigma_t^2 (E l is the characteristic length
-///    E G_f / sigma_t^2) depends only on zeta and C0/T. A secant on
-///    (log zeta, log l) at the current C0/T, then 3. again at the new zeta;
-///    repeated until both hold. G_f is measured on the same packing with
+///    E G_f / sigma_t^2) depends only on zeta and C0/T, and so does
+///    sigma_c / sigma_t: a Broyden iteration on (log zeta, log C0/T) for
+///    both (three tests an iteration), from the C0/T of 3.; if it would
+///    leave [zeta_min, zeta_max] or does not converge in 6 iterations, a
+///    nested search (secant on log zeta at fixed C0/T, then 3. again)
+///    takes over. G_f is measured on the same packing with
 ///    a notch at mid-height (half the section kept), in tension until the
 ///    sample is separated: without a notch much of the dissipation is
 ///    spread through the volume before the peak and G_f grows with the
