@@ -152,6 +152,17 @@ nlohmann::json compare(const nlohmann::json& a, const nlohmann::json& ref, doubl
   throw std::runtime_error(s.str());
 }
 
+/// m with softening zeta, T = the target sigma_t and C0 = rho T: the
+/// strengths' scale is irrelevant for sigma_c/sigma_t and G_f/sigma_t^2.
+dem::Material at_ratio(const dem::Material& m, const Targets& t, double zeta, double rho)
+{
+  dem::Material q = m;
+  q.zeta = zeta;
+  q.tensile = t.tensile_strength;
+  q.cohesion = rho * q.tensile;
+  return q;
+}
+
 /// C0/T for the targets' sigma_c/sigma_t at m's zeta (regula falsi on
 /// log(C0/T)); returns C0/T and sigma_t measured at T = target sigma_t.
 /// rho_guess > 0 (a first guess, or a solution at a nearby zeta) with *slope
@@ -164,9 +175,7 @@ std::pair<double, double> solve_ratio(Runner& R, const dem::Material& m, const T
   const double ratio_target = t.compressive_strength / t.tensile_strength;
   auto strengths = [&](double rho)
   {
-    dem::Material q = m;
-    q.tensile = t.tensile_strength; // scale is irrelevant for the ratio
-    q.cohesion = rho * q.tensile;
+    const dem::Material q = at_ratio(m, t, m.zeta, rho);
     const double st = R.run(q, "tension", false)["peak_stress_pa"].get<double>();
     const double sc = R.run(q, "compression", false)["peak_stress_pa"].get<double>();
     return std::pair{st, sc};
@@ -370,10 +379,7 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
       double zeta = std::clamp(m.zeta, cfg.zeta_min, cfg.zeta_max);
       auto l_at = [&](double z)
       {
-        dem::Material q = m;
-        q.zeta = z;
-        q.tensile = t.tensile_strength;
-        q.cohesion = rho * q.tensile;
+        const dem::Material q = at_ratio(m, t, z, rho);
         const double s_t = R.run(q, "tension", false)["peak_stress_pa"].get<double>();
         const double gf = R.run(q, "fracture", false)["fracture_energy_j_m2"].get<double>();
         return gf / (s_t * s_t);
@@ -398,10 +404,7 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
       {
         auto eval = [&](double z, double r)
         {
-          dem::Material q = m;
-          q.zeta = z;
-          q.tensile = t.tensile_strength;
-          q.cohesion = r * q.tensile;
+          const dem::Material q = at_ratio(m, t, z, r);
           const double s_t = R.run(q, "tension", false)["peak_stress_pa"].get<double>();
           const double s_c = R.run(q, "compression", false)["peak_stress_pa"].get<double>();
           const double gf = R.run(q, "fracture", false)["fracture_energy_j_m2"].get<double>();
