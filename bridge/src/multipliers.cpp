@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <omp.h>
 #include <stdexcept>
 #include <string>
 
@@ -21,9 +22,14 @@ struct MultiplierSolver::Factor
   // then costs O(nonzeros of G) instead of a factor of the particles' A,
   // which is nearly dense when many particles share an element.
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
-  std::vector<std::int32_t> dofs; // compact index -> FE dof
-  std::vector<double> full;       // FE-sized scratch
-  Eigen::VectorXd z;
+  std::vector<std::int32_t> dofs;  // compact dof -> FE dof
+  std::vector<std::int32_t> node;  // (points, npc): compact node of each entry of G
+  // G^T as a gather: the entries q = p npc + k of compact node c are
+  // entry[first[c] .. first[c + 1]), so G^T f is computed node by node,
+  // in parallel, with no write conflict
+  std::vector<std::int32_t> first, entry;
+  std::vector<double> vc;          // compact FE velocities
+  Eigen::VectorXd z, s;
 };
 
 namespace
@@ -81,6 +87,21 @@ MultiplierSolver::MultiplierSolver(const CouplingOperator& op, std::span<const d
   for (const auto& [n, c] : compact)
     for (int d = 0; d < bs; ++d)
       F.dofs[bs * c + d] = bs * n + d;
+  F.node.resize(np * npc);
+  F.first.assign(k + 1, 0);
+  for (std::size_t q = 0; q < np * npc; ++q)
+  {
+    F.node[q] = compact.at(nodes[q]);
+    ++F.first[F.node[q] + 1];
+  }
+  for (std::int32_t c = 0; c < k; ++c)
+    F.first[c + 1] += F.first[c];
+  F.entry.resize(np * npc);
+  {
+    std::vector<std::int32_t> fill(F.first.begin(), F.first.end() - 1);
+    for (std::size_t q = 0; q < np * npc; ++q)
+      F.entry[fill[F.node[q]]++] = static_cast<std::int32_t>(q);
+  }
   std::vector<Eigen::Triplet<double>> trip;
   for (std::int32_t i = 0; i < ns; ++i)
     trip.emplace_back(i, i, m_fe[F.dofs[i]]);
@@ -114,8 +135,9 @@ MultiplierSolver::MultiplierSolver(const CouplingOperator& op, std::span<const d
   F.ldlt.compute(K);
   if (F.ldlt.info() != Eigen::Success)
     throw std::runtime_error("multipliers: the constraint matrix is not symmetric positive definite");
-  F.full.assign(m_fe.size(), 0.0);
+  F.vc.assign(ns, 0.0);
   F.z.resize(ns);
+  F.s.resize(ns);
   _lambda.assign(3 * np, 0.0);
   _rhs.assign(3 * np, 0.0);
   _tmp.assign(3 * np, 0.0);
@@ -133,40 +155,115 @@ std::vector<double> MultiplierSolver::residual(std::span<const double> v_de,
   return r;
 }
 
+namespace
+{
+/// Threads for a pass over n points or nodes: a pass costs ~20 ns per point,
+/// so below a few hundred the team's start costs more than it saves.
+int threads_for(std::size_t n) { return n >= 256 ? omp_get_max_threads() : 1; }
+} // namespace
+
+void MultiplierSolver::apply(std::span<const double> uc, std::span<double> v) const
+{
+  const auto& F = *_factor;
+  const std::size_t np = _op.size();
+  const int npc = _op.nodes_per_cell(), bs = _op.block_size();
+  const double* a = _op.a().data();
+  const double* b = _op.b().data();
+  const double* nrm = _op.normals().data();
+#pragma omp parallel for schedule(static) num_threads(threads_for(np))
+  for (std::size_t p = 0; p < np; ++p)
+  {
+    double out[3] = {0.0, 0.0, 0.0};
+    for (int k = 0; k < npc; ++k)
+    {
+      const std::size_t q = p * npc + k;
+      const double* u = &uc[bs * F.node[q]];
+      for (int i = 0; i < 3; ++i)
+        out[i] += a[q] * u[i];
+      if (bs == 6)
+      {
+        // b (omega x n)
+        const double* w = u + 3;
+        const double* n = nrm + 3 * q;
+        out[0] += b[q] * (w[1] * n[2] - w[2] * n[1]);
+        out[1] += b[q] * (w[2] * n[0] - w[0] * n[2]);
+        out[2] += b[q] * (w[0] * n[1] - w[1] * n[0]);
+      }
+    }
+    for (int i = 0; i < 3; ++i)
+      v[3 * p + i] = out[i];
+  }
+}
+
+void MultiplierSolver::apply_transpose(std::span<const double> f, std::span<double> zc) const
+{
+  const auto& F = *_factor;
+  const std::size_t nn = F.first.size() - 1;
+  const int npc = _op.nodes_per_cell(), bs = _op.block_size();
+  const double* a = _op.a().data();
+  const double* b = _op.b().data();
+  const double* nrm = _op.normals().data();
+#pragma omp parallel for schedule(static) num_threads(threads_for(nn * 16))
+  for (std::size_t c = 0; c < nn; ++c)
+  {
+    double out[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    for (std::int32_t e = F.first[c]; e < F.first[c + 1]; ++e)
+    {
+      const std::int32_t q = F.entry[e];
+      const double* fp = &f[3 * (q / npc)];
+      for (int i = 0; i < 3; ++i)
+        out[i] += a[q] * fp[i];
+      if (bs != 6)
+        continue;
+      // <b (w x n), f> = <w, b (n x f)>: the moment is b n x f
+      const double* n = nrm + 3 * q;
+      out[3] += b[q] * (n[1] * fp[2] - n[2] * fp[1]);
+      out[4] += b[q] * (n[2] * fp[0] - n[0] * fp[2]);
+      out[5] += b[q] * (n[0] * fp[1] - n[1] * fp[0]);
+    }
+    for (int d = 0; d < bs; ++d)
+      zc[bs * c + d] = out[d];
+  }
+}
+
 double MultiplierSolver::correct(std::span<double> v_de, std::span<double> v_fe, bool residual)
 {
-  const std::size_t np = _op.size();
-  _op.interpolate(v_fe, _tmp);
-  for (std::size_t i = 0; i < 3 * np; ++i)
-    _rhs[i] = v_de[i] - _tmp[i];
-  // y = D^-1 r, z = G^T y, s = K^-1 z, lambda = D^-1 (r - G s) / dt
+  // With r = v_de - G v_fe the trial residual and s = K^-1 G^T D^-1 r, the
+  // Woodbury form of the correction is v_fe += s, v_de -= r - G s, and
+  // lambda = D^-1 (r - G s) / dt: one pass of G^T and two of G over the
+  // points (a third for the residual), all in the compact numbering of the
+  // FE dofs the overlap touches.
   auto& F = *_factor;
+  const std::size_t np = _op.size();
+  const std::size_t ns = F.dofs.size();
+  for (std::size_t i = 0; i < ns; ++i)
+    F.vc[i] = v_fe[F.dofs[i]];
+  apply(F.vc, _tmp);
   for (std::size_t p = 0; p < np; ++p)
     for (int i = 0; i < 3; ++i)
+    {
+      _rhs[3 * p + i] = v_de[3 * p + i] - _tmp[3 * p + i];
       _tmp[3 * p + i] = _m_de[p] * _rhs[3 * p + i];
-  std::fill(F.full.begin(), F.full.end(), 0.0);
-  _op.add_transpose(_tmp, F.full);
-  for (std::size_t i = 0; i < F.dofs.size(); ++i)
-    F.z[i] = F.full[F.dofs[i]];
-  const Eigen::VectorXd sol = F.ldlt.solve(F.z);
-  std::fill(F.full.begin(), F.full.end(), 0.0);
-  for (std::size_t i = 0; i < F.dofs.size(); ++i)
-    F.full[F.dofs[i]] = sol[i];
-  _op.interpolate(F.full, _tmp);
+    }
+  apply_transpose(_tmp, {F.z.data(), ns});
+  F.s = F.ldlt.solve(F.z);
+  for (std::size_t i = 0; i < ns; ++i)
+  {
+    F.vc[i] += F.s[i];
+    v_fe[F.dofs[i]] = F.vc[i];
+  }
+  apply({F.s.data(), ns}, _tmp);
   for (std::size_t p = 0; p < np; ++p)
     for (int i = 0; i < 3; ++i)
-      _lambda[3 * p + i] = _m_de[p] * (_rhs[3 * p + i] - _tmp[3 * p + i]) / _dt;
-  for (std::size_t p = 0; p < np; ++p)
-    for (int i = 0; i < 3; ++i)
-      v_de[3 * p + i] -= _dt / _m_de[p] * _lambda[3 * p + i];
-  std::fill(F.full.begin(), F.full.end(), 0.0);
-  _op.add_transpose(_lambda, F.full);
-  for (auto i : F.dofs)
-    v_fe[i] += _dt / _m_fe[i] * F.full[i];
+    {
+      const double d = _rhs[3 * p + i] - _tmp[3 * p + i];
+      _lambda[3 * p + i] = _m_de[p] * d / _dt;
+      v_de[3 * p + i] -= d;
+    }
   if (!residual)
     return std::numeric_limits<double>::quiet_NaN();
   // residual after the correction, in the scratch buffer (no allocation per step)
-  _op.interpolate(v_fe, _tmp);
+  apply(F.vc, _tmp);
   double worst = 0.0;
   for (std::size_t i = 0; i < 3 * np; ++i)
     worst = std::max(worst, std::abs(v_de[i] - _tmp[i]));
