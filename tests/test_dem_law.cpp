@@ -163,9 +163,43 @@ TEST_CASE("trial shear in one product equals the stored force turned minus K_s t
     const Vec3 fs{30.0 * std::cos(2 * s), -20.0, 10.0 * std::sin(s)};
     const Vec3 turned = rotate_shear(fs, ra, rb, fa, n_new);
     const Vec3 du = shear_increment(n_old, n_new, ra, rb, D, fa);
-    const Vec3 fused = trial_shear(fs, n_old, n_new, pair_rotation(ra, rb, fa), ks * D);
+    const Vec3 fused = trial_shear(fs, n_old, n_new,
+                                   pair_rotation(rotation_minus_identity(th_a),
+                                                 rotation_minus_identity(th_b), fa),
+                                   ks * D);
     const double scale = std::max(norm(fs), ks * D);
     for (int k = 0; k < 3; ++k)
       CHECK(std::abs(fused[k] - (turned[k] - ks * du[k])) < 1e-12 * scale);
   }
+}
+
+TEST_CASE("trial shear: a link that neither turns nor spins keeps its force exactly",
+          "[dem][law]")
+{
+  // R - I is exactly zero without rotation and matches R - I from
+  // rotation_matrix to round-off of the entries (~1e-17 for |theta| = 0.3).
+  const Mat3 q0 = rotation_minus_identity({0.0, 0.0, 0.0});
+  for (double v : q0)
+    CHECK(v == 0.0);
+  const Vec3 th{0.1, -0.2, 0.2};
+  const Mat3 r = rotation_matrix(th), q = rotation_minus_identity(th);
+  for (int k = 0; k < 9; ++k)
+    CHECK(std::abs(q[k] + (k % 4 == 0 ? 1.0 : 0.0) - r[k]) < 1e-15);
+  // A stored force and a normal that do not change: trial_shear gives the
+  // force back exactly, whatever the stiffness (the old form, P of
+  // R (fs + K_s D n), left K_s D eps ~ 1e-12 N here from 1 - |n|^2 != 0).
+  Vec3 n{0.3, -0.5, 0.8};
+  const double ln = norm(n);
+  for (auto& c : n)
+    c /= ln;
+  const double ks_d = 4e6 * 2.1e-3;
+  const Vec3 zero = trial_shear({0.0, 0.0, 0.0}, n, n, q0, ks_d);
+  for (double v : zero)
+    CHECK(v == 0.0);
+  // a tangential force is kept to round-off relative to itself (1e-15 of
+  // |fs|), not to K_s D
+  Vec3 fs{0.8, 0.0, -0.3}; // fs . n = 0
+  const Vec3 kept = trial_shear(fs, n, n, q0, ks_d);
+  for (int k = 0; k < 3; ++k)
+    CHECK(std::abs(kept[k] - fs[k]) < 1e-15 * norm(fs));
 }

@@ -52,6 +52,16 @@ LinkLaw Material::law(double ra, double rb, double d_init) const
           std::max(zeta, 1e-12)};
 }
 
+double position_quantum(std::span<const double> x)
+{
+  double m = 0.0;
+  for (double c : x)
+    m = std::max(m, std::abs(c));
+  if (!(m > 0.0) || !std::isfinite(m))
+    return 0.0;
+  return std::ldexp(1.0, std::ilogb(m) + 2 - 52);
+}
+
 Particles make_particles(std::span<const double> x, std::span<const double> r, double rho_bulk,
                          double packing_fraction)
 {
@@ -65,6 +75,10 @@ Particles make_particles(std::span<const double> x, std::span<const double> r, d
   Particles p;
   const std::size_t n = r.size();
   p.x.assign(x.begin(), x.end());
+  p.quantum = position_quantum(x);
+  if (p.quantum > 0.0)
+    for (double& c : p.x)
+      c = std::nearbyint(c / p.quantum) * p.quantum; // exact: q is a power of 2
   p.x0 = p.x;
   p.v.assign(3 * n, 0.0);
   p.w.assign(3 * n, 0.0);
@@ -133,8 +147,12 @@ Links create_links(const Particles& p, double lambda, const Material& mat)
                      l.d0.push_back(d);
                      l.kn.push_back(law.kn);
                      l.ks.push_back(law.ks);
+                     // as the force loop computes it (times 1 / D): the
+                     // same bits, so a link at rest sees no change of its
+                     // normal, hence no shear from round-off
+                     const double inv = 1.0 / d;
                      for (int k = 0; k < 3; ++k)
-                       l.n.push_back((p.x[3 * j + k] - p.x[3 * i + k]) / d);
+                       l.n.push_back((p.x[3 * j + k] - p.x[3 * i + k]) * inv);
                    });
   l.fs.assign(3 * l.size(), 0.0);
   l.delta_max.assign(l.size(), 0.0);

@@ -347,11 +347,11 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     }
     else
     {
-      // each sphere's rotation over the step
+      // each sphere's rotation over the step, as R - I
 #pragma omp for schedule(static)
       for (std::size_t i = 0; i < np; ++i)
       {
-        const Mat3 r = rotation_matrix({p.w[3 * i] * dt, p.w[3 * i + 1] * dt, p.w[3 * i + 2] * dt});
+        const Mat3 r = rotation_minus_identity({p.w[3 * i] * dt, p.w[3 * i + 1] * dt, p.w[3 * i + 2] * dt});
         std::copy(r.begin(), r.end(), s.rot.begin() + 9 * i);
       }
       sweep(s.links, l.b, np, true, f, t, link_prepare, link_force);
@@ -817,6 +817,11 @@ void DemSolver::end_step()
   constexpr std::size_t block = 1024;
   const std::size_t nb = (n + block - 1) / block;
   _part.resize(2 * nb);
+  // moves by multiples of the position quantum q (Particles::quantum):
+  // (d + C) - C rounds d to a multiple of q for |d| < 2^51 q, C = 1.5 2^52 q,
+  // and x + that is exact, so equal velocities move spheres by equal bits
+  const double q = _p.quantum;
+  const double C = q > 0.0 ? std::ldexp(1.5, 52) * q : 0.0;
 #pragma omp parallel for schedule(static) num_threads(impl::threads_for(n))
   for (std::size_t b = 0; b < nb; ++b)
   {
@@ -827,9 +832,10 @@ void DemSolver::end_step()
       for (int k = 0; k < 3; ++k)
       {
         const double vh = _p.v[3 * i + k];
-        _p.x[3 * i + k] += dt * vh;
+        const double dx = q > 0.0 ? (dt * vh + C) - C : dt * vh;
+        _p.x[3 * i + k] += dx;
         if (loaded)
-          we += dt * vh * 0.5 * (fext_old[3 * i + k] + _fext[3 * i + k]);
+          we += dx * 0.5 * (fext_old[3 * i + k] + _fext[3 * i + k]);
         v2 += vh * vh;
         w2 += _p.w[3 * i + k] * _p.w[3 * i + k];
       }

@@ -54,7 +54,7 @@ struct SweepIndex
 /// when the links, the neighbour pairs or the thread count change.
 struct ForceScratch
 {
-  std::vector<double> rot;       ///< each sphere's rotation over the step, 9 per sphere
+  std::vector<double> rot;       ///< each sphere's rotation over the step minus I, 9 per sphere
   SweepIndex links, pairs;
   std::vector<double> pair_slip; ///< per pair: energy dissipated by friction in the step [J]
   std::vector<std::vector<std::pair<std::int32_t, double>>> broken; ///< per thread
@@ -79,7 +79,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
                     ForceCounters& c);
 
 /// Assemblies of fewer spheres than this run their step on one thread (the
-/// team's start and barriers would cost more than they save); default 4096.
+/// team's start and barriers would cost more than they save); default 2048.
 void set_min_spheres_per_thread_team(std::size_t n);
 std::size_t min_spheres_per_thread_team();
 
