@@ -310,8 +310,8 @@ TEST_CASE("coupled patch test: a uniform velocity is carried unchanged", "[bridg
   // - a link's stored normal differed from the force loop's in the last bit.
   // Before, in the overlap: 4.0e-11 m/s on the particles, 4.5e-11 m/s on
   // the shell nodes (1.3e-10 and 1.5e-10 of V), 2.2e-10 m/s elsewhere.
-  // Now 4.7e-14 m/s on every particle and 5.6e-14 m/s on the shell nodes
-  // (1.6e-13 and 1.9e-13 of V): what is left is the corrections' round-off
+  // Now 5.3e-14 m/s on every particle and on the shell nodes (1.8e-13 of
+  // V): what is left is the corrections' round-off
   // (G_FE sums node velocities with weights adding up to 1 within eps).
   // Bound: the issue's 1e-10 of V, for every particle and node.
   double de = 0.0, fe = 0.0, spin = 0.0;
@@ -356,8 +356,8 @@ TEST_CASE("coupled patch test: a uniform velocity is carried unchanged", "[bridg
   CHECK(fe < 1e-10 * 0.3);
   CHECK(rel_de < 1e-10);
   CHECK(rel_fe < 1e-10);
-  // spins: the surface velocity they give, omega R_max (measured 1.0e-11
-  // rad/s, 3e-14 m/s)
+  // spins: the surface velocity they give, omega R_max (measured 8e-12
+  // rad/s, 2e-14 m/s)
   const double rmax = *std::max_element(b.p.r.begin(), b.p.r.end());
   CHECK(spin * rmax < 1e-10 * 0.3);
 }

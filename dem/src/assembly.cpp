@@ -59,7 +59,7 @@ double position_quantum(std::span<const double> x)
     m = std::max(m, std::abs(c));
   if (!(m > 0.0) || !std::isfinite(m))
     return 0.0;
-  return std::ldexp(1.0, std::ilogb(m) + 2 - 52);
+  return std::ldexp(1.0, std::ilogb(m) + 1 - 52);
 }
 
 Particles make_particles(std::span<const double> x, std::span<const double> r, double rho_bulk,

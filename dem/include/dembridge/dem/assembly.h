@@ -49,8 +49,9 @@ struct Particles
   /// mean of their two spheres'. Empty: 1 everywhere.
   std::vector<double> weight;
   /// Position quantum q [m] (make_particles): every coordinate is a
-  /// multiple of q, a power of 2 at least the largest coordinate's ulp, and
-  /// the solver moves spheres by multiples of q. Differences of positions
+  /// multiple of q, twice the ulp of the largest coordinate (2.2e-16 m
+  /// when it is in [0.5, 1) m), and the solver moves spheres by
+  /// multiples of q. Differences of positions
   /// are then exact, so a uniform translation changes no branch between
   /// spheres by even one bit (rounding x + v dt sphere by sphere would, each
   /// position in its own binade). 0: positions as given, ordinary rounding.
@@ -59,13 +60,14 @@ struct Particles
 };
 
 /// The position quantum of a set of coordinates: 2^(e - 52) with 2^e >
-/// 2 max |x| (room for the assembly to move as far again before its
-/// coordinates outgrow the quantum); 0 if every coordinate is 0.
+/// max |x|. Sums of multiples of it stay exact while |x| < 2^(e+1), more
+/// than twice the largest coordinate (room for the assembly to move as far
+/// again); 0 if every coordinate is 0.
 double position_quantum(std::span<const double> x);
 
 /// Spheres of solid density rho_s = rho_bulk / packing_fraction (METHOD.md).
-/// The centres are rounded to multiples of position_quantum(x) (by at most
-/// half an ulp of the largest coordinate: ~1e-16 m for a 1 m assembly).
+/// The centres are rounded to multiples of position_quantum(x) (each moves
+/// by at most q/2, an ulp of the largest coordinate).
 /// @param x centres (n, 3) [m]; @param r radii (n) [m], > 0
 /// @throws std::runtime_error on a radius <= 0 or a non-finite coordinate.
 Particles make_particles(std::span<const double> x, std::span<const double> r, double rho_bulk,
