@@ -85,13 +85,7 @@ struct IdentifyConfig
   Targets target;
   dem::Material fixed;           ///< zeta, phi_i, phi_c kept; the rest identified
   double tol_elastic = 0.005;    ///< relative on E, absolute on nu
-  /// relative on sigma_c / sigma_t: 2 %, about the scatter of the
-  /// compression peak between nearby C0/T on the default sample (measured at
-  /// zeta 10: sigma_c/sigma_t 0.944, 0.989, 0.996, 1.012, 1.021 of the target
-  /// at C0/T 1.86, 2.01, 2.02, 2.04, 2.06, local slopes from 0.75 to 2.2),
-  /// so 1 % chased noise (5 test pairs for the first C0/T solve), and half
-  /// the 5 %, leaving room for the second packing
-  double tol_strength = 0.02;
+  double tol_strength = 0.01;    ///< relative on sigma_c / sigma_t
   double tol_fracture = 0.05;    ///< relative on G_f / sigma_t^2
   /// zeta is searched in [zeta_min, zeta_max] when G_f is a target. Above
   /// about 20 (measured on the 400-sphere and the default samples) the
