@@ -176,15 +176,31 @@ TEST_CASE("trial shear in one product equals the stored force turned minus K_s t
 TEST_CASE("trial shear: a link that neither turns nor spins keeps its force exactly",
           "[dem][law]")
 {
-  // R - I is exactly zero without rotation and matches R - I from
-  // rotation_matrix to round-off of the entries (~1e-17 for |theta| = 0.3).
+  // R - I is exactly zero without rotation; I + (R - I) is a rotation
+  // (orthogonal to round-off, 1e-15) about theta (which it leaves fixed),
+  // turning a vector as rotate() does (1e-15 of its length)
   const Mat3 q0 = rotation_minus_identity({0.0, 0.0, 0.0});
   for (double v : q0)
     CHECK(v == 0.0);
   const Vec3 th{0.1, -0.2, 0.2};
-  const Mat3 r = rotation_matrix(th), q = rotation_minus_identity(th);
-  for (int k = 0; k < 9; ++k)
-    CHECK(std::abs(q[k] + (k % 4 == 0 ? 1.0 : 0.0) - r[k]) < 1e-15);
+  const Mat3 q = rotation_minus_identity(th);
+  Mat3 r = q;
+  r[0] += 1.0;
+  r[4] += 1.0;
+  r[8] += 1.0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+    {
+      double rr = 0.0;
+      for (int k = 0; k < 3; ++k)
+        rr += r[3 * i + k] * r[3 * j + k];
+      CHECK(std::abs(rr - (i == j ? 1.0 : 0.0)) < 1e-15);
+    }
+  const Vec3 qt = detail::mul(q, th);
+  CHECK(norm(qt) < 1e-16);
+  const Vec3 v{0.7, 0.1, -0.4}, rv = detail::mul(r, v), expect = rotate(th, v);
+  for (int k = 0; k < 3; ++k)
+    CHECK(std::abs(rv[k] - expect[k]) < 1e-15);
   // A stored force and a normal that do not change: trial_shear gives the
   // force back exactly, whatever the stiffness (the old form, P of
   // R (fs + K_s D n), left K_s D eps ~ 1e-12 N here from 1 - |n|^2 != 0).

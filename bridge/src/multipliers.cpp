@@ -203,7 +203,7 @@ void MultiplierSolver::apply_transpose(std::span<const double> f, std::span<doub
   const double* a = _op.a().data();
   const double* b = _op.b().data();
   const double* nrm = _op.normals().data();
-#pragma omp parallel for schedule(static) num_threads(threads_for(nn * 16))
+#pragma omp parallel for schedule(static) num_threads(threads_for(F.entry.size() / npc))
   for (std::size_t c = 0; c < nn; ++c)
   {
     double out[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};

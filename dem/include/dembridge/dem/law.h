@@ -250,14 +250,11 @@ inline Mat3 rotation_minus_identity(const Vec3& th)
 
 inline Mat3 rotation_matrix(const Vec3& th)
 {
-  // R = I + sa [th]x + ca [th]x^2, with [th]x^2 = th th^T - |th|^2 I
-  const double a2 = detail::dot(th, th);
-  double sa, ca;
-  detail::rodrigues_factors(a2, sa, ca);
-  const double d = 1.0 - ca * a2;
-  return {d + ca * th[0] * th[0],       ca * th[0] * th[1] - sa * th[2], ca * th[0] * th[2] + sa * th[1],
-          ca * th[1] * th[0] + sa * th[2], d + ca * th[1] * th[1],       ca * th[1] * th[2] - sa * th[0],
-          ca * th[2] * th[0] - sa * th[1], ca * th[2] * th[1] + sa * th[0], d + ca * th[2] * th[2]};
+  Mat3 r = rotation_minus_identity(th);
+  r[0] += 1.0;
+  r[4] += 1.0;
+  r[8] += 1.0;
+  return r;
 }
 
 inline Vec3 shear_increment(const Vec3& n_old, const Vec3& n_new, const Mat3& ra, const Mat3& rb,
