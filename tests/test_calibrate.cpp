@@ -62,6 +62,22 @@ TEST_CASE("full identification: strengths within 5 %, file read back by the demo
   // sigma_t +9 %: the soft skin is a smaller share of a larger sample),
   // reported without failing: open in the identification issue
   CHECK_NOFAIL(r.checks["larger_sample"]["within"].get<bool>());
+  // the search's tests reused across C0/T (the same run up to the peak)
+  // carry the peak of the test they come from: same zeta, that C0
+  int reused = 0;
+  for (const auto& h : r.history)
+    if (h.contains("reused_from_cohesion_pa"))
+    {
+      ++reused;
+      bool found = false;
+      for (const auto& o : r.history)
+        found = found
+                || (o["test"] == h["test"] && !o.contains("reused_from_cohesion_pa")
+                    && o["cohesion_pa"] == h["reused_from_cohesion_pa"] && o["softening"] == h["softening"]
+                    && o["peak_stress_pa"] == h["peak_stress_pa"]);
+      CHECK(found);
+    }
+  CHECK(reused > 0);
   const auto& a = r.achieved;
   CHECK(std::abs(a["youngs_modulus_pa"].get<double>() / 30e9 - 1.0) < 0.02);
   CHECK(std::abs(a["poisson_ratio"].get<double>() - 0.2) < 0.02);
@@ -84,9 +100,10 @@ TEST_CASE("full identification: strengths within 5 %, file read back by the demo
 
 TEST_CASE("fracture energy identified through zeta, strengths kept", "[calibrate]")
 {
-  // G_f of the notched test to separation. The Broyden iteration on (zeta,
+  // G_f of the notched test to separation. The joint iteration on (zeta,
   // C0/T) stops when G_f / sigma_t^2 is within 5 % (tol_fracture) and
-  // sigma_c / sigma_t within 1 %; the final rescale of T and
+  // sigma_c / sigma_t within 1 % (or 2.5 %, the compression peak's noise,
+  // at the best point after 6 iterations); the final rescale of T and
   // C0 scales G_f by k^2 and sigma_t by k exactly, so G_f is within 5 % of
   // the target up to the rescaled sigma_t's own error (sigma_t within 1 %
   // of its target after the rescale: (1.01)^2): 7 %.

@@ -97,6 +97,48 @@ TEST_CASE("compression sample breaks mostly in shear and is stronger than in ten
   CHECK(c["links_broken_shear"].get<std::size_t>() > c["links_broken_tension"].get<std::size_t>());
 }
 
+TEST_CASE("cohesion demand: with C0 above it a test is the same bit for bit, below it not",
+          "[dem][sample]")
+{
+  // ForceCounters::cohesion_demand is the smallest C0 at which no link's
+  // shear reached the Mohr-Coulomb cap; C0 enters nothing else, so a run with
+  // C0 just above the demand follows the same path exactly (the calibration
+  // reuses such runs across C0/T), and one just below it breaks a link in
+  // shear, which changes the run. Exact comparisons: nothing is rounded
+  // differently when C0 changes and no cap is reached.
+  for (const char* test : {"tension", "compression"})
+  {
+    auto a = small(test);
+    a.material.cohesion = 100.0 * a.material.tensile; // out of reach
+    const auto ra = demo::run_sample(a);
+    INFO(test << ": " << ra.dump());
+    const double d = ra["cohesion_demand_pa"].get<double>();
+    const double dp = ra["cohesion_demand_at_peak_pa"].get<double>();
+    REQUIRE(ra["links_broken_shear"].get<std::size_t>() == 0);
+    REQUIRE(d > 0.0);
+    CHECK(dp <= d);
+    auto above = a;
+    above.material.cohesion = d * (1.0 + 1e-9);
+    const auto rb = demo::run_sample(above);
+    CHECK(rb["peak_stress_pa"].get<double>() == ra["peak_stress_pa"].get<double>());
+    CHECK(rb["final_strain"].get<double>() == ra["final_strain"].get<double>());
+    CHECK(rb["steps"].get<std::int64_t>() == ra["steps"].get<std::int64_t>());
+    CHECK(rb["links_broken_tension"].get<std::size_t>() == ra["links_broken_tension"].get<std::size_t>());
+    CHECK(rb["links_broken_shear"].get<std::size_t>() == 0);
+    CHECK(rb["cohesion_demand_pa"].get<double>() == d);
+    // C0 above the demand up to the peak: the same path up to the peak (here
+    // the peak also stays the largest stress of the run; the calibration
+    // uses such runs for their peak only and re-runs its final tests)
+    auto at_peak = a;
+    at_peak.material.cohesion = dp * (1.0 + 1e-9);
+    CHECK(demo::run_sample(at_peak)["peak_stress_pa"].get<double>() == ra["peak_stress_pa"].get<double>());
+    auto below = a;
+    below.material.cohesion = d * (1.0 - 1e-3);
+    const auto rc = demo::run_sample(below);
+    CHECK(rc["links_broken_shear"].get<std::size_t>() > 0);
+  }
+}
+
 TEST_CASE("notched tension to separation: fracture energy scales as T^2 / E", "[dem][sample]")
 {
   // A notch at mid-height (half the section kept) run until the sample is

@@ -259,6 +259,9 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     s.broken.resize(nt);
   for (auto& b : s.broken)
     b.clear();
+  const bool track = c.track_cohesion;
+  const double demand_before = c.cohesion_demand;
+  s.demand.assign(8 * nt, demand_before); // a cache line per thread
   const LinkLaw base = mat.law(1.0, 1.0, 1.0);
   const ContactFactors cf = contact_factors(mat);
   const bool weighted_links = !l.weight.empty(), weighted_spheres = !p.weight.empty();
@@ -318,6 +321,18 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     }
     const Vec3 trial{n[4], n[5], n[6]};
     const ShearForce sf = link_shear_cap(trial, nf.fn, law);
+    if (track)
+    {
+      // the cap with C0 = the demand before this call; beyond it, this
+      // thread's demand grows
+      const double f2 = dot3(trial.data(), trial.data());
+      const double room = law.s_int * demand_before - nf.fn * law.tan_phi_i;
+      if (f2 > 0.0 && (room < 0.0 || f2 > room * room))
+      {
+        double& dm = s.demand[8 * omp_get_thread_num()];
+        dm = std::max(dm, (std::sqrt(f2) + nf.fn * law.tan_phi_i) / law.s_int);
+      }
+    }
     if (sf.exceeded)
     {
       // Mohr-Coulomb reached: the link breaks and its elastic energy is
@@ -359,6 +374,9 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   }
   if (short_team)
     throw std::runtime_error("force loop: OpenMP gave fewer threads than asked (set OMP_DYNAMIC=false)");
+  if (track)
+    for (int k = 0; k < nt; ++k)
+      c.cohesion_demand = std::max(c.cohesion_demand, s.demand[8 * k]);
 
   // links broken now: energy booked in link order, their pairs handed to the
   // contacts within this step

@@ -16,15 +16,28 @@
 /// 3. Strengths: the law is homogeneous of degree 1 in (T, C0): scaling both
 ///    scales every peak stress. So sigma_c/sigma_t depends only on C0/T
 ///    (zeta, phi_i, phi_c fixed): regula falsi (Illinois) on log(C0/T) for the ratio,
-///    then one exact rescale for sigma_t, then a check run.
+///    then one exact rescale for sigma_t, then a check run. The ratio is
+///    noisy near the solution (1-2 %: the compression peak is the onset of a
+///    cascade of failures), so a bracket narrower than that noise resolves
+///    is not split further: the nearest test is taken and reported.
+///    C0 enters a test only through the Mohr-Coulomb cap, so a search test
+///    is reused for another C0/T (its peak: the same run up to the peak)
+///    when no link reached the cap before the peak with either C0
+///    (SampleConfig: cohesion_demand_at_peak_pa): at a given zeta the
+///    tension peak is then found once, and compression peaks beyond the
+///    C0/T where shear stops mattering are not re-run either.
 /// 4. Fracture energy (optional): G_f scales as k^2 when T and C0 scale by
 ///    k, so l = G_f / sigma_t^2 (E l is the characteristic length
 ///    E G_f / sigma_t^2) depends only on zeta and C0/T, and so does
-///    sigma_c / sigma_t: a Broyden iteration on (log zeta, log C0/T) for
-///    both (three tests an iteration), from the C0/T of 3.; if it would
-///    leave [zeta_min, zeta_max] or does not converge in 6 iterations, a
-///    nested search (secant on log zeta at fixed C0/T, then 3. again)
-///    takes over. G_f is measured on the same packing with
+///    sigma_c / sigma_t: from the C0/T of 3. (solved to 3 % only), an
+///    iteration on (log zeta, log C0/T) for both (three tests an iteration)
+///    that fits a plane to each over every test so far (weighted least
+///    squares, nearness weights, a prior on the slopes) and goes where both
+///    vanish: the noise of q and l averages out instead of steering secants;
+///    if it would leave [zeta_min, zeta_max] or does not converge in 6
+///    iterations (a best point within the 1-2 % noise of sigma_c/sigma_t
+///    and tol_fracture is taken, and said), a nested search (secant on log
+///    zeta at fixed C0/T, then 3. again) takes over. G_f is measured on the same packing with
 ///    a notch at mid-height (half the section kept), in tension until the
 ///    sample is separated: without a notch much of the dissipation is
 ///    spread through the volume before the peak and G_f grows with the

@@ -233,6 +233,7 @@ nlohmann::json run_sample(const SampleConfig& cfg)
     return s / ids.size();
   };
   const double gauge_length = mean_z(g_hi, p.x0) - mean_z(g_lo, p.x0);
+  solver.track_cohesion_demand();
   solver.start();
 
   nlohmann::json out;
@@ -294,6 +295,7 @@ nlohmann::json run_sample(const SampleConfig& cfg)
   std::vector<double> eps, sig, lat, ax;
   double peak = 0.0, eps_peak = 0.0;
   double dissipated_at_peak = 0.0; // by the links (softening + breakage) [J]
+  double demand_at_peak = 0.0;     // the solver's cohesion demand then [Pa]
   bool after_peak = false, separated = false;
   double t_low = -1.0; // since when the force through the crack is below 1 % of the peak
   auto measure = [&](bool print, bool frame)
@@ -331,6 +333,7 @@ nlohmann::json run_sample(const SampleConfig& cfg)
       eps_peak = std::abs(strain);
       const auto e = solver.energy();
       dissipated_at_peak = e.softening + e.breakage;
+      demand_at_peak = solver.cohesion_demand();
     }
     else if (cfg.to_separation)
     {
@@ -414,6 +417,8 @@ nlohmann::json run_sample(const SampleConfig& cfg)
   out["final_strain"] = eps.back();
   out["links_broken_tension"] = links.count(LinkState::broken_tension);
   out["links_broken_shear"] = links.count(LinkState::broken_shear);
+  out["cohesion_demand_pa"] = solver.cohesion_demand();
+  out["cohesion_demand_at_peak_pa"] = demand_at_peak;
   const auto e = solver.energy();
   out["energy"] = {{"kinetic_j", e.kinetic},       {"elastic_j", e.elastic},
                    {"softening_j", e.softening},   {"breakage_j", e.breakage},

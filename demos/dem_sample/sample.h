@@ -65,7 +65,12 @@ dem::Packing sample_packing(const SampleConfig& cfg);
 /// Runs the test; returns the summary (particles, links,
 /// mean_links_per_particle, packing_fraction, youngs_modulus_pa,
 /// poisson_ratio, peak_stress_pa, strain_at_peak, links_broken_tension,
-/// links_broken_shear, wall_s, ...). A tension test run to separation
+/// links_broken_shear, cohesion_demand_pa, wall_s, ...). cohesion_demand_pa
+/// is the smallest C0 at which no link would have failed in shear during the
+/// run (dem::ForceCounters::cohesion_demand): the same test with any C0
+/// above it, all else equal, gives the same result bit for bit;
+/// cohesion_demand_at_peak_pa the same up to the peak (the same run up to
+/// it). A tension test run to separation
 /// (to_separation, and max_strain large enough: `separated` is true)
 /// measures the fracture energy `fracture_energy_j_m2`: the energy the links
 /// dissipate (softening, and what is left in a link when it breaks) over the

@@ -26,6 +26,14 @@ struct ForceCounters
 {
   double friction = 0.0;   ///< sliding of contacts
   double breakage = 0.0;   ///< elastic energy released when links break
+  /// Set to track cohesion_demand (costs a comparison per link and call).
+  bool track_cohesion = false;
+  /// The smallest cohesion C0 [Pa] at which no intact link's shear force
+  /// would have reached the Mohr-Coulomb cap in the calls so far: the largest
+  /// (|F_s| + F_n tan phi_i) / S_int (F_n > 0 in tension) over links and
+  /// calls. C0 enters nothing else, so a run with another C0 above it (all
+  /// else equal) is the same bit for bit: a test can be reused across C0.
+  double cohesion_demand = 0.0;
 };
 
 /// How the items of the force loop (links, or neighbour pairs; sorted by
@@ -60,6 +68,7 @@ struct ForceScratch
   std::vector<std::vector<std::pair<std::int32_t, double>>> broken; ///< per thread
   std::vector<std::pair<std::int32_t, double>> broken_all;
   std::vector<std::int32_t> broken_ids;
+  std::vector<double> demand;    ///< per thread: ForceCounters::cohesion_demand
   const std::int32_t* links_for = nullptr; ///< the link array the index was built for
   std::size_t links_size = 0, pairs_version = SIZE_MAX;
   std::size_t bytes() const;
@@ -197,6 +206,10 @@ public:
   std::int64_t steps() const { return _steps; }
   double dt() const { return _dt; }
   void set_damping(double c);
+  /// From now on, track the cohesion demand (ForceCounters::cohesion_demand).
+  void track_cohesion_demand() { _counters.track_cohesion = true; }
+  /// The cohesion demand so far [Pa] (0 unless tracked).
+  double cohesion_demand() const { return _counters.cohesion_demand; }
   const NeighbourList& neighbours() const { return _nl; }
   /// Bytes held by the solver's own arrays and scratch (the neighbour list
   /// included; the particles and links are the caller's).
