@@ -472,10 +472,15 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
       // q_target) and log(l / l_target) over (log zeta, log C0/T) through
       // every test so far, weighted by nearness to the current point
       // (Gaussian, 0.35 in the logs), with a prior on the slopes that the
-      // tests outweigh once they are there (d log q / d log zeta: 0 +- 0.3;
-      // d log q / d log(C0/T): the first solve's +- 50 %; d log l /
-      // d log zeta: 0.5 +- 0.5, measured 0.3-0.6 between zeta 3 and 20;
-      // d log l / d log(C0/T): 0.5 +- 1) and moves to where both planes
+      // tests outweigh once they are there, from what was measured: d log q
+      // / d log zeta: -0.25 +- 0.15 (-0.24 and -0.29 from zeta 10 to 19 and
+      // 15 on the default sample, -0.28 to 17 in session 10); d log q /
+      // d log(C0/T): 3 +- 1.5 times the first solve's chord over its
+      // bracket (q saturates at large C0/T, so the slope near the solution
+      // is steeper than the chord: 0.75 against 0.19 on the default sample,
+      // 0.37 against 0.12 on 400 spheres); d log l / d log zeta: 0.5 +- 0.5
+      // (0.3-0.6 between zeta 3 and 20); d log l / d log(C0/T): 0.8 +- 0.8
+      // (0.8 between C0/T 1.85 and 2.4 at zeta 16-17). It moves to where both planes
       // vanish (a factor 2 at most in either). Three tests an iteration
       // (tension, compression, notched tension; the tension reused across
       // C0/T where the run allows). It stops when a test is within the
@@ -549,7 +554,12 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
         };
         const double lz_min = std::log(cfg.zeta_min), lz_max = std::log(cfg.zeta_max);
         const double lr_min = std::log(0.3), lr_max = std::log(30.0), l2 = std::log(2.0);
-        const double dq_dy = slope / q_target; // d log q / d log(C0/T) of the first solve
+        // the chord of log q over the first solve's widest bracket
+        const auto [lo, hi] = std::minmax_element(first.begin(), first.end(),
+                                                  [](const auto& u, const auto& v) { return u[0] < v[0]; });
+        const double dq_dy = hi->at(0) > lo->at(0) + 1e-6
+                                 ? std::max((hi->at(1) - lo->at(1)) / (hi->at(0) - lo->at(0)), 0.02)
+                                 : std::max(slope / q_target, 0.02);
         Point cur = eval(zeta, rho);
         for (int it = 0; it < 6; ++it)
         {
@@ -558,8 +568,8 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
             converged = true;
             break;
           }
-          const auto a = plane(cur.x, cur.y, false, 0.015, {0.0, dq_dy}, {0.3, 0.5 * std::abs(dq_dy) + 0.05});
-          const auto b = plane(cur.x, cur.y, true, 0.03, {0.5, 0.5}, {0.5, 1.0});
+          const auto a = plane(cur.x, cur.y, false, 0.015, {-0.25, 3.0 * dq_dy}, {0.15, 1.5 * dq_dy + 0.05});
+          const auto b = plane(cur.x, cur.y, true, 0.03, {0.5, 0.8}, {0.5, 0.8});
           const double det = a[1] * b[2] - a[2] * b[1];
           if (!(std::abs(det) > 1e-9))
             break;
