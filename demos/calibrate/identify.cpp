@@ -2,6 +2,8 @@
 
 #include "dembridge/dem/packing.h"
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -33,11 +35,12 @@ struct Runner
   std::map<std::string, nlohmann::json> peak_done;
 
   /// test: tension | compression | fracture (notched tension to separation).
-  /// peak_only (tension, compression): only the peak stress (and E, nu) are used, so a
-  /// run with another C0 serves when the run up to its peak did not reach
-  /// the shear cap with either C0 (cohesion_demand_at_peak_pa): the run is
-  /// then the same up to the peak. (After it, the post-peak part may
-  /// differ; the final tests are always run.)
+  /// A run with another C0 serves when it did not reach the shear cap with
+  /// either C0 (cohesion_demand_pa): it is the same bit for bit. With
+  /// peak_only (only the peak stress, E and nu are used) it serves when it
+  /// did not reach the cap before its peak (cohesion_demand_at_peak_pa): the
+  /// same run up to the peak; the post-peak part may differ, so such a reuse
+  /// is kept apart (peak_done) and the final tests are always run.
   nlohmann::json run(const dem::Material& m, const std::string& test, bool elastic,
                      const std::string& out = "", bool peak_only = false)
   {
@@ -95,17 +98,15 @@ struct Runner
       if (auto it = peak_done.find(key.str()); peak_only && it != peak_done.end())
         return it->second;
       // the shear cap never reached, up to the peak or in the whole run
-      const char* demand = peak_only && test != "fracture" ? "cohesion_demand_at_peak_pa"
-                           : test == "fracture" || test == "tension" ? "cohesion_demand_pa"
-                                                                      : nullptr;
-      if (demand && !elastic)
+      const char* demand = peak_only ? "cohesion_demand_at_peak_pa" : "cohesion_demand_pa";
+      if (!elastic)
         for (const auto& [c0, r] : by_rest[rest.str()])
         {
           const double d = r[demand].get<double>() * (1.0 + 1e-9);
           if (d < c0 && d < m.cohesion)
           {
             record(r, c0);
-            (std::string(demand) == "cohesion_demand_pa" ? done : peak_done)[key.str()] = r;
+            (peak_only ? peak_done : done)[key.str()] = r;
             return r;
           }
         }
@@ -217,7 +218,7 @@ dem::Material at_ratio(const dem::Material& m, const Targets& t, double zeta, do
 /// 400-sphere and the default sample), so once the bracket is narrower than
 /// `noise_width` in log(C0/T) (what that noise allows to resolve) without
 /// a test within tol, the test nearest the target is taken and reported.
-/// Each test is appended to *tested as (log C0/T, log(ratio / target)).
+/// Each test is appended to *tested as (C0/T, log(ratio / target)).
 /// Width in log(C0/T) below which a bracket of the ratio is not split
 /// further (solve_ratio): 1.5 % noise in sigma_c/sigma_t over the ratio's
 /// slope near the solution, d log ratio / d log(C0/T) ~ 0.75 (default
@@ -238,7 +239,7 @@ std::pair<double, double> solve_ratio(Runner& R, const dem::Material& m, const T
     const double sc = R.run(q, "compression", false, "", true)["peak_stress_pa"].get<double>();
     const double miss = std::log(sc / st / ratio_target);
     if (tested)
-      tested->push_back({std::log(rho), miss});
+      tested->push_back({rho, miss});
     if (std::abs(miss) < best[0])
       best = {std::abs(miss), rho, st};
     return std::pair{st, sc};
@@ -444,7 +445,7 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
     double slope = 0.0; // d(sigma_c/sigma_t) / d log(C0/T), from the last solve
     // with a G_f target this first solve only starts the joint one (which
     // moves C0/T again with zeta): to 3 %, not tol_strength
-    std::vector<std::array<double, 2>> first; // its tests: log C0/T, log(q / q_target)
+    std::vector<std::array<double, 2>> first; // its tests: C0/T, log(q / q_target)
     auto [rho, st] = solve_ratio(R, m, t, t.fracture_energy > 0.0 ? std::max(cfg.tol_strength, 0.03)
                                                                    : cfg.tol_strength,
                                  0.0, &slope, &first);
@@ -490,22 +491,22 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
       {
         struct Point
         {
-          double x, y, q, l, st; // log zeta, log C0/T, log q/q*, log l/l*, sigma_t
+          double zeta, rho; // exactly those of the tests (re-used by the runs' cache)
+          double q, l, st;  // log q/q*, log l/l*, sigma_t
           bool has_l;
-          double zeta, rho;
+          double x() const { return std::log(zeta); }
+          double y() const { return std::log(rho); }
         };
         std::vector<Point> P;
-        const double x0 = std::log(zeta);
-        for (const auto& [y, q] : first)
-          P.push_back({x0, y, q, 0.0, 0.0, false, zeta, std::exp(y)});
-        auto eval = [&](double z, double r) // (zeta, C0/T): exactly those of the tests before
+        for (const auto& [r, q] : first)
+          P.push_back({zeta, r, q, 0.0, 0.0, false});
+        auto eval = [&](double z, double r)
         {
-          const double x = std::log(z), y = std::log(r);
           const dem::Material q = at_ratio(m, t, z, r);
           const double s_t = R.run(q, "tension", false, "", true)["peak_stress_pa"].get<double>();
           const double s_c = R.run(q, "compression", false, "", true)["peak_stress_pa"].get<double>();
           const double gf = R.run(q, "fracture", false)["fracture_energy_j_m2"].get<double>();
-          P.push_back({x, y, std::log(s_c / s_t / q_target), std::log(gf / (s_t * s_t) / l_target), s_t, true, z, r});
+          P.push_back({z, r, std::log(s_c / s_t / q_target), std::log(gf / (s_t * s_t) / l_target), s_t, true});
           return P.back();
         };
         // weighted least squares for v ~ c0 + c1 (x - xc) + c2 (y - yc), a
@@ -513,53 +514,34 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
         auto plane = [&](double xc, double yc, bool on_l, double noise, std::array<double, 2> mean,
                          std::array<double, 2> sd)
         {
-          double A[3][4] = {};
+          Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+          Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
           for (const auto& p : P)
           {
             if (on_l && !p.has_l)
               continue;
-            const double dx = p.x - xc, dy = p.y - yc;
-            const double w = std::exp(-(dx * dx + dy * dy) / (2.0 * 0.35 * 0.35)) / (noise * noise);
-            const double r[3] = {1.0, dx, dy};
-            for (int i = 0; i < 3; ++i)
-            {
-              for (int j = 0; j < 3; ++j)
-                A[i][j] += w * r[i] * r[j];
-              A[i][3] += w * r[i] * (on_l ? p.l : p.q);
-            }
+            const Eigen::Vector3d r(1.0, p.x() - xc, p.y() - yc);
+            const double w = std::exp(-(r[1] * r[1] + r[2] * r[2]) / (2.0 * 0.35 * 0.35)) / (noise * noise);
+            A += w * r * r.transpose();
+            rhs += w * (on_l ? p.l : p.q) * r;
           }
-          A[0][0] += 1e-12;
+          A(0, 0) += 1e-12;
           for (int k = 1; k < 3; ++k)
           {
-            A[k][k] += 1.0 / (sd[k - 1] * sd[k - 1]);
-            A[k][3] += mean[k - 1] / (sd[k - 1] * sd[k - 1]);
+            A(k, k) += 1.0 / (sd[k - 1] * sd[k - 1]);
+            rhs[k] += mean[k - 1] / (sd[k - 1] * sd[k - 1]);
           }
-          // Gauss-Jordan with partial pivoting (symmetric positive definite)
-          for (int c = 0; c < 3; ++c)
-          {
-            int piv = c;
-            for (int r = c + 1; r < 3; ++r)
-              if (std::abs(A[r][c]) > std::abs(A[piv][c]))
-                piv = r;
-            std::swap(A[c], A[piv]);
-            for (int r = 0; r < 3; ++r)
-              if (r != c)
-              {
-                const double f = A[r][c] / A[c][c];
-                for (int k = c; k < 4; ++k)
-                  A[r][k] -= f * A[c][k];
-              }
-          }
-          return std::array<double, 3>{A[0][3] / A[0][0], A[1][3] / A[1][1], A[2][3] / A[2][2]};
+          const Eigen::Vector3d c = A.ldlt().solve(rhs);
+          return std::array<double, 3>{c[0], c[1], c[2]};
         };
         const double lz_min = std::log(cfg.zeta_min), lz_max = std::log(cfg.zeta_max);
         const double lr_min = std::log(0.3), lr_max = std::log(30.0), l2 = std::log(2.0);
         // the chord of log q over the first solve's widest bracket
         const auto [lo, hi] = std::minmax_element(first.begin(), first.end(),
                                                   [](const auto& u, const auto& v) { return u[0] < v[0]; });
-        const double dq_dy = hi->at(0) > lo->at(0) + 1e-6
-                                 ? std::max((hi->at(1) - lo->at(1)) / (hi->at(0) - lo->at(0)), 0.02)
-                                 : std::max(slope / q_target, 0.02);
+        const double wide = std::log(hi->at(0) / lo->at(0));
+        const double dq_dy = wide > 1e-6 ? std::max((hi->at(1) - lo->at(1)) / wide, 0.02)
+                                         : std::max(slope / q_target, 0.02);
         Point cur = eval(zeta, rho);
         for (int it = 0; it < 6; ++it)
         {
@@ -568,26 +550,27 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
             converged = true;
             break;
           }
-          const auto a = plane(cur.x, cur.y, false, 0.015, {-0.25, 3.0 * dq_dy}, {0.15, 1.5 * dq_dy + 0.05});
-          const auto b = plane(cur.x, cur.y, true, 0.03, {0.5, 0.8}, {0.5, 0.8});
+          const double x = cur.x(), y = cur.y();
+          const auto a = plane(x, y, false, 0.015, {-0.25, 3.0 * dq_dy}, {0.15, 1.5 * dq_dy + 0.05});
+          const auto b = plane(x, y, true, 0.03, {0.5, 0.8}, {0.5, 0.8});
           const double det = a[1] * b[2] - a[2] * b[1];
           if (!(std::abs(det) > 1e-9))
             break;
           const double dx = -(b[2] * a[0] - a[2] * b[0]) / det;
           const double dy = -(a[1] * b[0] - b[1] * a[0]) / det;
           const double shrink = std::max({1.0, std::abs(dx) / l2, std::abs(dy) / l2});
-          const double xn = std::clamp(cur.x + dx / shrink, lz_min, lz_max);
-          const double yn = std::clamp(cur.y + dy / shrink, lr_min, lr_max);
-          if (std::abs(xn - cur.x) < 1e-9 && std::abs(dx) > 1e-9) // zeta at a bound and asks beyond
+          const double xn = std::clamp(x + dx / shrink, lz_min, lz_max);
+          const double yn = std::clamp(y + dy / shrink, lr_min, lr_max);
+          if (std::abs(xn - x) < 1e-9 && std::abs(dx) > 1e-9) // zeta at a bound and asks beyond
             break;
-          if (std::abs(xn - cur.x) + std::abs(yn - cur.y) < 1e-6) // the planes say here: noise
+          if (std::abs(xn - x) + std::abs(yn - y) < 1e-6) // the planes say here: noise
             break;
           cur = eval(std::exp(xn), std::exp(yn));
         }
         // where it stops: the best point tested (the tolerances' multiples)
         auto badness = [&](const Point& p)
         { return std::max(std::abs(p.q) / cfg.tol_strength, std::abs(p.l) / cfg.tol_fracture); };
-        const Point* best = &cur;
+        const Point* best = &cur; // tested, so has_l
         for (const auto& p : P)
           if (p.has_l && badness(p) < badness(*best))
             best = &p;
