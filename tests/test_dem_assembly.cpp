@@ -489,6 +489,21 @@ TEST_CASE("NaN in the state stops the run with a message", "[dem][errors]")
   CHECK_THROWS_WITH(s.step(), Contains("non-finite") && Contains("sphere"));
 }
 
+TEST_CASE("a sphere turning by more than 1 rad in a step stops the run with a message",
+          "[dem][errors]")
+{
+  // the force loop's four-number rotation holds below pi; 1 rad per step is
+  // far beyond any stable run (|w| dt ~ 1e-3 at the critical step)
+  auto p = lattice(3);
+  auto l = create_links(p, 1.4, concrete());
+  const double dt = 0.5 * critical_time_step(p, l);
+  DemSolver s(p, l, concrete(), dt, 0.0, 0.1e-3);
+  s.start();
+  s.step();
+  p.w[3 * 13 + 2] = 2.0 / dt; // a corrupted state, e.g. from a user torque
+  CHECK_THROWS_WITH(s.step(), Contains("sphere 13 turns by 2") && Contains("1 rad"));
+}
+
 TEST_CASE("boundary conditions: prescribed displacement and external force on a bonded pair",
           "[dem]")
 {

@@ -163,10 +163,8 @@ TEST_CASE("trial shear in one product equals the stored force turned minus K_s t
     const Vec3 fs{30.0 * std::cos(2 * s), -20.0, 10.0 * std::sin(s)};
     const Vec3 turned = rotate_shear(fs, ra, rb, fa, n_new);
     const Vec3 du = shear_increment(n_old, n_new, ra, rb, D, fa);
-    const Vec3 fused = trial_shear(fs, n_old, n_new,
-                                   pair_rotation(rotation_minus_identity(th_a),
-                                                 rotation_minus_identity(th_b), fa),
-                                   ks * D);
+    const Vec3 fused
+        = trial_shear(fs, n_old, n_new, rotation_minus_identity(th_a), step_rotation(th_b), fa, ks * D);
     const double scale = std::max(norm(fs), ks * D);
     for (int k = 0; k < 3; ++k)
       CHECK(std::abs(fused[k] - (turned[k] - ks * du[k])) < 1e-12 * scale);
@@ -179,7 +177,7 @@ TEST_CASE("trial shear: a link that neither turns nor spins keeps its force exac
   // R - I is exactly zero without rotation; I + (R - I) is a rotation
   // (orthogonal to round-off, 1e-15) about theta (which it leaves fixed),
   // turning a vector as rotate() does (1e-15 of its length)
-  const Mat3 q0 = rotation_minus_identity({0.0, 0.0, 0.0});
+  const Mat3 q0 = rotation_minus_identity(Vec3{0.0, 0.0, 0.0});
   for (double v : q0)
     CHECK(v == 0.0);
   const Vec3 th{0.1, -0.2, 0.2};
@@ -201,6 +199,20 @@ TEST_CASE("trial shear: a link that neither turns nor spins keeps its force exac
   const Vec3 v{0.7, 0.1, -0.4}, rv = detail::mul(r, v), expect = rotate(th, v);
   for (int k = 0; k < 3; ++k)
     CHECK(std::abs(rv[k] - expect[k]) < 1e-15);
+  // the force loop's four-number form of the same rotation: (R - I) v as the
+  // matrix gives it, to round-off of |v| (1e-15; |theta| = 0.3, and 1e-7 in
+  // the series branch), exactly zero for theta = 0
+  for (const Vec3& t : {th, Vec3{1e-7, 3e-8, -2e-8}})
+  {
+    const Mat3 m = rotation_minus_identity(t), mq = rotation_minus_identity(step_rotation(t));
+    const Vec3 a = rotation_minus_identity_times(step_rotation(t), v), b = detail::mul(m, v);
+    for (int k = 0; k < 3; ++k)
+      CHECK(std::abs(a[k] - b[k]) < 1e-15 * norm(v));
+    for (int k = 0; k < 9; ++k)
+      CHECK(std::abs(mq[k] - m[k]) < 1e-15);
+  }
+  for (double c : rotation_minus_identity_times(step_rotation({0.0, 0.0, 0.0}), v))
+    CHECK(c == 0.0);
   // A stored force and a normal that do not change: trial_shear gives the
   // force back exactly, whatever the stiffness (the old form, P of
   // R (fs + K_s D n), left K_s D eps ~ 1e-12 N here from 1 - |n|^2 != 0).
@@ -209,13 +221,14 @@ TEST_CASE("trial shear: a link that neither turns nor spins keeps its force exac
   for (auto& c : n)
     c /= ln;
   const double ks_d = 4e6 * 2.1e-3;
-  const Vec3 zero = trial_shear({0.0, 0.0, 0.0}, n, n, q0, ks_d);
+  const StepRotation none = step_rotation({0.0, 0.0, 0.0});
+  const Vec3 zero = trial_shear({0.0, 0.0, 0.0}, n, n, rotation_minus_identity(none), none, 0.4, ks_d);
   for (double v : zero)
     CHECK(v == 0.0);
   // a tangential force is kept to round-off relative to itself (1e-15 of
   // |fs|), not to K_s D
   Vec3 fs{0.8, 0.0, -0.3}; // fs . n = 0
-  const Vec3 kept = trial_shear(fs, n, n, q0, ks_d);
+  const Vec3 kept = trial_shear(fs, n, n, rotation_minus_identity(none), none, 0.4, ks_d);
   for (int k = 0; k < 3; ++k)
     CHECK(std::abs(kept[k] - fs[k]) < 1e-15 * norm(fs));
 }

@@ -46,17 +46,27 @@ inline void thread_range(std::size_t np, int t, int nt, std::size_t& lo, std::si
 /// spheres; `reset` zeroes them first.
 /// Values per item that a sweep prepares for a whole sphere at once.
 constexpr int prepared = 8;
+/// Doubles per sphere record of the force loop: centre (3), radius, the
+/// rotation over the step as a StepRotation (u (3), k): 64 bytes, one cache
+/// line, all that a link reads of its sphere b.
+constexpr int record = 8;
+/// How many items ahead branches() prefetches sphere records.
+constexpr std::int32_t ahead = 16;
 /// Unit normal a -> b and branch length of the items [k0, k1) of sphere i,
 /// into g[0..3] of each item's `prepared` values: done for a sphere's items
 /// together, so that the square roots and divisions of successive items
 /// overlap (the loop bodies are short and independent).
-inline void branches(const double* x, std::size_t i, std::span<const std::int32_t> b,
+inline void branches(const double* rec, std::size_t i, std::span<const std::int32_t> b,
                      std::int32_t k0, std::int32_t k1, double* g)
 {
-  const double* xi = x + 3 * i;
+  const double* xi = rec + record * i;
+  const std::int32_t last = static_cast<std::int32_t>(b.size()) - 1;
   for (std::int32_t k = k0; k < k1; ++k)
   {
-    const double* xj = x + 3 * b[k];
+    // the records of the items a sweep reaches two spheres on: their loads
+    // miss the core's caches (sphere b lies anywhere along the curve)
+    __builtin_prefetch(rec + record * b[std::min(k + ahead, last)]);
+    const double* xj = rec + record * b[k];
     double* gk = g + prepared * (k - k0);
     gk[0] = xj[0] - xi[0];
     gk[1] = xj[1] - xi[1];
@@ -87,6 +97,7 @@ void sweep(SweepIndex& ix, std::span<const std::int32_t> b, std::size_t np, bool
   const std::int32_t bhi = static_cast<std::int32_t>(hi);
   std::vector<double>& g = ix.geometry[t];
   std::int32_t slot = ix.cross_first[t];
+  const std::int32_t last = static_cast<std::int32_t>(b.size()) - 1;
   for (std::size_t i = lo; i < hi; ++i)
   {
     const std::int32_t k0 = ix.first[i], k1 = ix.first[i + 1];
@@ -125,6 +136,9 @@ void sweep(SweepIndex& ix, std::span<const std::int32_t> b, std::size_t np, bool
     for (std::int32_t k = k0; k < k1; ++k)
     {
       const std::int32_t j = b[k];
+      const std::int32_t jn = b[std::min(k + ahead, last)];
+      __builtin_prefetch(f + 3 * jn, 1);
+      __builtin_prefetch(q + 3 * jn, 1);
       double local[6];
       const double* o = local;
       if (j >= bhi)
@@ -151,9 +165,9 @@ void sweep(SweepIndex& ix, std::span<const std::int32_t> b, std::size_t np, bool
   }
 }
 
-inline Mat3 load3x3(const double* r)
+inline StepRotation load_rotation(const double* rec)
 {
-  return {r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8]};
+  return {{rec[4], rec[5], rec[6]}, rec[7]};
 }
 
 /// Writes the force on b (fb, N) and the torque factor q (torque on either
@@ -223,7 +237,7 @@ std::size_t SweepIndex::bytes() const
 
 std::size_t ForceScratch::bytes() const
 {
-  std::size_t s = (rot.capacity() + pair_slip.capacity()) * sizeof(double) + links.bytes()
+  std::size_t s = (records.capacity() + pair_slip.capacity()) * sizeof(double) + links.bytes()
                   + pairs.bytes() + broken_ids.capacity() * sizeof(std::int32_t)
                   + broken_all.capacity() * sizeof(broken_all[0]);
   for (const auto& b : broken)
@@ -251,8 +265,10 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     s.links_size = l.size();
     s.pairs_version = SIZE_MAX;
   }
-  s.rot.resize(9 * np);
-  const double* x = p.x.data();
+  // the records, 64-byte aligned (one cache line each)
+  s.records.resize(record * np + record);
+  double* rec = s.records.data();
+  rec += (record - (reinterpret_cast<std::uintptr_t>(rec) / sizeof(double)) % record) % record;
   double* f = p.f.data();
   double* t = p.t.data();
   if (s.broken.size() < static_cast<std::size_t>(nt))
@@ -267,6 +283,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   const bool weighted_links = !l.weight.empty(), weighted_spheres = !p.weight.empty();
   const double* rad = p.r.data();
   bool short_team = false;
+  std::size_t spinning = np; // a sphere turning by more than 1 rad in the step
 
   // a cohesive link: force on b and torque factor into out; false once broken
   // per sphere: branches, then the trial shear forces (the stored force and
@@ -274,26 +291,26 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   auto link_prepare = [&](std::size_t i, std::int32_t k0, std::int32_t k1, double* g)
                           __attribute__((always_inline))
   {
-    branches(x, i, l.b, k0, k1, g);
-    const Mat3 ra = load3x3(&s.rot[9 * i]);
+    branches(rec, i, l.b, k0, k1, g);
+    const double* ri = rec + record * i;
+    const Mat3 qa = rotation_minus_identity(load_rotation(ri));
     for (std::int32_t k = k0; k < k1; ++k)
     {
       if (l.state[k] != LinkState::intact)
         continue;
       double* gk = g + prepared * (k - k0);
-      const std::int32_t j = l.b[k];
-      const double inv_rs = 1.0 / (rad[i] + rad[j]);
+      const double* rj = rec + record * l.b[k];
+      const double inv_rs = 1.0 / (ri[3] + rj[3]);
       const Vec3 tr = trial_shear({l.fs[3 * k], l.fs[3 * k + 1], l.fs[3 * k + 2]},
                                   {l.n[3 * k], l.n[3 * k + 1], l.n[3 * k + 2]}, {gk[0], gk[1], gk[2]},
-                                  pair_rotation(ra, load3x3(&s.rot[9 * j]), rad[i] * inv_rs),
-                                  l.ks[k] * gk[3]);
+                                  qa, load_rotation(rj), ri[3] * inv_rs, l.ks[k] * gk[3]);
       gk[7] = inv_rs;
       gk[4] = tr[0];
       gk[5] = tr[1];
       gk[6] = tr[2];
     }
   };
-  auto link_force = [&](std::size_t, std::int32_t k, const double* n, double* out)
+  auto link_force = [&](std::size_t i, std::int32_t k, const double* n, double* out)
                         __attribute__((always_inline)) -> bool
   {
     if (l.state[k] != LinkState::intact)
@@ -305,7 +322,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     LinkLaw law = base;
     law.kn = l.kn[k];
     law.ks = l.ks[k];
-    law.s_int = link_surface(p, l, k);
+    law.s_int = pair_surface(rec[record * i + 3], rec[record * l.b[k] + 3]); // = link_surface
     const double delta = D - l.d0[k];
     const NormalForce nf = link_normal_force(delta, l.delta_max[k], law);
     double* fs_old = &l.fs[3 * k];
@@ -362,18 +379,41 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     }
     else
     {
-      // each sphere's rotation over the step, as R - I
+      // each sphere's record: centre, radius, rotation over the step
 #pragma omp for schedule(static)
       for (std::size_t i = 0; i < np; ++i)
       {
-        const Mat3 r = rotation_minus_identity({p.w[3 * i] * dt, p.w[3 * i + 1] * dt, p.w[3 * i + 2] * dt});
-        std::copy(r.begin(), r.end(), s.rot.begin() + 9 * i);
+        const Vec3 th{p.w[3 * i] * dt, p.w[3 * i + 1] * dt, p.w[3 * i + 2] * dt};
+        if (detail::dot(th, th) > 1.0)
+        {
+#pragma omp critical(dem_spinning)
+          spinning = std::min(spinning, i);
+        }
+        const StepRotation q = step_rotation(th);
+        double* r = rec + record * i;
+        r[0] = p.x[3 * i];
+        r[1] = p.x[3 * i + 1];
+        r[2] = p.x[3 * i + 2];
+        r[3] = rad[i];
+        r[4] = q.u[0];
+        r[5] = q.u[1];
+        r[6] = q.u[2];
+        r[7] = q.k;
       }
       sweep(s.links, l.b, np, true, f, t, link_prepare, link_force);
     }
   }
   if (short_team)
     throw std::runtime_error("force loop: OpenMP gave fewer threads than asked (set OMP_DYNAMIC=false)");
+  if (spinning < np)
+  {
+    std::ostringstream msg;
+    msg << "force loop: sphere " << spinning << " turns by "
+        << dt * std::sqrt(dot3(&p.w[3 * spinning], &p.w[3 * spinning])) << " rad in one step of "
+        << dt << " s (angular velocity |w| dt must stay below 1 rad; the time step is far above "
+           "the critical one, or the state diverged)";
+    throw std::runtime_error(msg.str());
+  }
   if (track)
     for (int k = 0; k < nt; ++k)
       c.cohesion_demand = std::max(c.cohesion_demand, s.demand[8 * k]);
@@ -422,9 +462,9 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     const double* n_old = nl.touching[q] ? &nl.n[3 * q] : n;
     const Vec3 fs_prev = nl.touching[q] ? Vec3{fs_old[0], fs_old[1], fs_old[2]} : Vec3{0, 0, 0};
     const Vec3 trial = trial_shear(fs_prev, {n_old[0], n_old[1], n_old[2]}, {n[0], n[1], n[2]},
-                                   pair_rotation(load3x3(&s.rot[9 * i]), load3x3(&s.rot[9 * j]),
-                                                 rad[i] / rs),
-                                   law.ks * D);
+                                   rotation_minus_identity(load_rotation(rec + record * i)),
+                                   load_rotation(rec + record * j),
+                                   rad[i] / rs, law.ks * D);
     const ShearForce sf = contact_shear_cap(trial, fn, law);
     const double wq = weighted_spheres ? 0.5 * (p.weight[i] + p.weight[j]) : 1.0;
     s.pair_slip[q] = wq * sf.slip_energy;
@@ -444,7 +484,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     {
       sweep(s.pairs, nl.b, np, false, f, t,
             [&](std::size_t i, std::int32_t k0, std::int32_t k1, double* g)
-            { branches(x, i, nl.b, k0, k1, g); },
+            { branches(rec, i, nl.b, k0, k1, g); },
             contact_force);
       // torques: each sphere's radius times its summed torque factors
       std::size_t lo, hi;

@@ -69,8 +69,7 @@ Vec3 rotate(const Vec3& theta, const Vec3& v);
 /// The rotation matrix of the rotation vector theta (same formula).
 Mat3 rotation_matrix(const Vec3& theta);
 /// R - I for the same rotation, without forming R: exactly zero for
-/// theta = 0, and accurate to round-off relative to |theta| for small ones
-/// (what the force loop stores for each sphere's rotation over a step).
+/// theta = 0, and accurate to round-off relative to |theta| for small ones.
 Mat3 rotation_minus_identity(const Vec3& theta);
 
 /// Each sphere carries the old contact normal with its own rotation over
@@ -91,27 +90,43 @@ Vec3 shear_increment(const Vec3& n_old, const Vec3& n_new, const Mat3& ra, const
 /// rigid motion turns it exactly with the pair.
 Vec3 rotate_shear(const Vec3& fs, const Mat3& ra, const Mat3& rb, double fa, const Vec3& n_new);
 
-/// The pair's rotation over the step, f_a R_a + f_b R_b (the matrix both
-/// shear_increment and rotate_shear apply, before projecting).
-Mat3 pair_rotation(const Mat3& ra, const Mat3& rb, double fa);
+/// A rotation over a step in four numbers (what the force loop keeps per
+/// sphere, beside its centre and radius, in one 64-byte record):
+/// u = (sin a / a) theta and k = 1 / (1 + cos a), a = |theta| < pi. Then
+///   R - I = [u]x + k (u u^T - |u|^2 I),
+/// Rodrigues' formula with (1 - cos a) / a^2 = k (sin a / a)^2. Zero rotation
+/// gives u = 0 exactly, hence R - I = 0 exactly.
+struct StepRotation
+{
+  Vec3 u;   ///< (sin a / a) theta [-]
+  double k; ///< 1 / (1 + cos a) [-]
+};
+/// @param theta rotation vector, |theta| < pi (the force loop asks < 1 rad)
+StepRotation step_rotation(const Vec3& theta);
+/// (R - I) v for the rotation q, without forming R.
+Vec3 rotation_minus_identity_times(const StepRotation& q, const Vec3& v);
+/// R - I of the rotation q as a matrix (worth forming for a sphere's links
+/// together: 15 operations per product instead of 27).
+Mat3 rotation_minus_identity(const StepRotation& q);
 
 /// Trial shear force of the step, before any cap, in one product:
 ///   fs_trial = P (Rp (fs_old + K_s D n_old)),
-/// with Rp = pair_rotation(ra, rb, f_a) and P the projection on the tangent
-/// plane of n_new. Both rotate_shear and shear_increment are Rp then P, and
-/// linear, so this equals rotate_shear(fs_old) - K_s shear_increment(n_old)
-/// to round-off, at a third of the cost (what the force loop uses).
-/// It takes Qp = Rp - I (pair_rotation of the spheres' rotation_minus_identity)
-/// and evaluates, since P n_new = 0,
+/// with Rp = f_a R_a + f_b R_b the pair's rotation and P the projection on
+/// the tangent plane of n_new. Both rotate_shear and shear_increment are Rp
+/// then P, and linear, so this equals rotate_shear(fs_old) - K_s
+/// shear_increment(n_old) to round-off, at a third of the cost (what the
+/// force loop uses). It evaluates, with Qp = Rp - I and since P n_new = 0,
 ///   fs_trial = P (fs_old + K_s D (n_old - n_new) + Qp (fs_old + K_s D n_old)),
 /// so that no term of size K_s D cancels another: the round-off is relative
 /// to the shear force and its increment, and a link that neither turns nor
 /// spins (n_new == n_old, Qp = 0) keeps its force exactly. (P Rp (fs_old +
 /// K_s D n_old) as written leaves K_s D eps, ~1e-11 N for concrete links, on
 /// a link at rest, every step.)
-/// @param ks_d K_s times the branch length D [N]
-Vec3 trial_shear(const Vec3& fs_old, const Vec3& n_old, const Vec3& n_new, const Mat3& qp,
-                 double ks_d);
+/// @param qa R_a - I, sphere a's rotation over the step (a matrix: the force
+/// loop forms it once for all links of a); @param qb sphere b's rotation
+/// @param fa = R_a / (R_a + R_b); @param ks_d K_s times the branch length D [N]
+Vec3 trial_shear(const Vec3& fs_old, const Vec3& n_old, const Vec3& n_new, const Mat3& qa,
+                 const StepRotation& qb, double fa, double ks_d);
 
 
 struct ShearForce
@@ -281,24 +296,40 @@ inline Vec3 rotate_shear(const Vec3& fs, const Mat3& ra, const Mat3& rb, double 
   return r;
 }
 
-inline Mat3 pair_rotation(const Mat3& ra, const Mat3& rb, double fa)
+inline StepRotation step_rotation(const Vec3& th)
 {
-  const double fb = 1.0 - fa;
-  Mat3 r;
-  for (int k = 0; k < 9; ++k)
-    r[k] = fa * ra[k] + fb * rb[k];
-  return r;
+  double sa, ca;
+  detail::rodrigues_factors(detail::dot(th, th), sa, ca);
+  return {{sa * th[0], sa * th[1], sa * th[2]}, ca / (sa * sa)};
 }
 
-inline Vec3 trial_shear(const Vec3& fs_old, const Vec3& n_old, const Vec3& n_new, const Mat3& qp,
-                        double ks_d)
+inline Vec3 rotation_minus_identity_times(const StepRotation& q, const Vec3& v)
+{
+  const Vec3 c = detail::cross(q.u, v);
+  const double uv = detail::dot(q.u, v), uu = detail::dot(q.u, q.u);
+  return {c[0] + q.k * (q.u[0] * uv - uu * v[0]), c[1] + q.k * (q.u[1] * uv - uu * v[1]),
+          c[2] + q.k * (q.u[2] * uv - uu * v[2])};
+}
+
+inline Mat3 rotation_minus_identity(const StepRotation& q)
+{
+  const Vec3& u = q.u;
+  const double k = q.k, uu = detail::dot(u, u);
+  return {k * (u[0] * u[0] - uu), k * u[0] * u[1] - u[2],  k * u[0] * u[2] + u[1],
+          k * u[1] * u[0] + u[2], k * (u[1] * u[1] - uu),  k * u[1] * u[2] - u[0],
+          k * u[2] * u[0] - u[1], k * u[2] * u[1] + u[0],  k * (u[2] * u[2] - uu)};
+}
+
+inline Vec3 trial_shear(const Vec3& fs_old, const Vec3& n_old, const Vec3& n_new, const Mat3& qa,
+                        const StepRotation& qb, double fa, double ks_d)
 {
   const Vec3 v{fs_old[0] + ks_d * n_old[0], fs_old[1] + ks_d * n_old[1],
                fs_old[2] + ks_d * n_old[2]};
-  const Vec3 q = detail::mul(qp, v);
+  const Vec3 qva = detail::mul(qa, v), qvb = rotation_minus_identity_times(qb, v);
+  const double fb = 1.0 - fa;
   Vec3 r;
   for (int k = 0; k < 3; ++k)
-    r[k] = fs_old[k] + ks_d * (n_old[k] - n_new[k]) + q[k];
+    r[k] = fs_old[k] + ks_d * (n_old[k] - n_new[k]) + (fa * qva[k] + fb * qvb[k]);
   const double rn = detail::dot(r, n_new);
   for (int k = 0; k < 3; ++k)
     r[k] -= rn * n_new[k];

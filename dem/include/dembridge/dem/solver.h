@@ -62,7 +62,9 @@ struct SweepIndex
 /// when the links, the neighbour pairs or the thread count change.
 struct ForceScratch
 {
-  std::vector<double> rot;       ///< each sphere's rotation over the step minus I, 9 per sphere
+  /// per sphere, 64-byte aligned: centre (3), radius, rotation over the step
+  /// (StepRotation: u (3), k), what a link reads of its spheres
+  std::vector<double> records;
   SweepIndex links, pairs;
   std::vector<double> pair_slip; ///< per pair: energy dissipated by friction in the step [J]
   std::vector<std::vector<std::pair<std::int32_t, double>>> broken; ///< per thread
