@@ -224,6 +224,9 @@ dem::Material at_ratio(const dem::Material& m, const Targets& t, double zeta, do
 /// slope near the solution, d log ratio / d log(C0/T) ~ 0.75 (default
 /// sample, zeta 10), is 2 % in C0/T, either side.
 constexpr double noise_width = 0.04;
+/// The band of sigma_c/sigma_t (relative) within which a test counts as
+/// hitting the target up to the compression peak's noise (1-2 %).
+constexpr double q_noise_band = 0.025;
 
 std::pair<double, double> solve_ratio(Runner& R, const dem::Material& m, const Targets& t, double tol,
                                       double rho_guess, double* slope,
@@ -558,6 +561,22 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
             break;
           const double dx = -(b[2] * a[0] - a[2] * b[0]) / det;
           const double dy = -(a[1] * b[0] - b[1] * a[0]) / det;
+          // a step the noise cannot resolve (q's 1.5 % over its slopes, 0.25
+          // in log zeta and 0.75 in log C0/T, is 0.06 and 0.02 either side;
+          // l's 3 % over 0.5 is 0.06), from a point already within the
+          // noise band: another test would only sample the noise
+          if (std::abs(dx) < noise_width && std::abs(dy) < noise_width
+              && std::abs(std::expm1(cur.q)) < q_noise_band && std::abs(std::expm1(cur.l)) < cfg.tol_fracture)
+          {
+            converged = true;
+            if (!cfg.quiet)
+              std::cout << "  the planes' next step (" << dx << " in log zeta, " << dy
+                        << " in log C0/T) is below what the noise resolves, and this point is within "
+                           "it (sigma_c/sigma_t "
+                        << 100.0 * std::expm1(cur.q) << " %, G_f " << 100.0 * std::expm1(cur.l)
+                        << " %): taken" << std::endl;
+            break;
+          }
           const double shrink = std::max({1.0, std::abs(dx) / l2, std::abs(dy) / l2});
           const double xn = std::clamp(x + dx / shrink, lz_min, lz_max);
           const double yn = std::clamp(y + dy / shrink, lr_min, lr_max);
@@ -579,7 +598,7 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
         st = best->st;
         // not within tol_strength, but within the noise of q (1-2 %, see
         // solve_ratio) and G_f within its tolerance: taken, and said
-        if (!converged && std::abs(std::expm1(best->q)) < 0.025
+        if (!converged && std::abs(std::expm1(best->q)) < q_noise_band
             && std::abs(std::expm1(best->l)) < cfg.tol_fracture)
         {
           converged = true;
