@@ -63,8 +63,9 @@ inline void branches(const double* rec, std::size_t i, std::span<const std::int3
   const std::int32_t last = static_cast<std::int32_t>(b.size()) - 1;
   for (std::int32_t k = k0; k < k1; ++k)
   {
-    // the records of the items a sweep reaches two spheres on: their loads
-    // miss the core's caches (sphere b lies anywhere along the curve)
+    // the record of the item `ahead` items on (two or three spheres later):
+    // sphere b lies anywhere along the curve, so its record is rarely in
+    // the core's caches when its link comes
     __builtin_prefetch(rec + record * b[std::min(k + ahead, last)]);
     const double* xj = rec + record * b[k];
     double* gk = g + prepared * (k - k0);
