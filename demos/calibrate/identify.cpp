@@ -561,10 +561,12 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
             break;
           const double dx = -(b[2] * a[0] - a[2] * b[0]) / det;
           const double dy = -(a[1] * b[0] - b[1] * a[0]) / det;
-          // a step the noise cannot resolve (q's 1.5 % over its slopes, 0.25
-          // in log zeta and 0.75 in log C0/T, is 0.06 and 0.02 either side;
-          // l's 3 % over 0.5 is 0.06), from a point already within the
-          // noise band: another test would only sample the noise
+          // a step the noise cannot resolve, from a point already within the
+          // noise band: another test would only sample the noise. What the
+          // noise resolves: q's 1.5 % over its slopes, 0.25 in log zeta and
+          // 0.75 in log C0/T, is 0.06 and 0.02 either side, l's 3 % over 0.5
+          // is 0.06; noise_width (0.04) is used for both, the stricter of
+          // the two in log zeta
           if (std::abs(dx) < noise_width && std::abs(dy) < noise_width
               && std::abs(std::expm1(cur.q)) < q_noise_band && std::abs(std::expm1(cur.l)) < cfg.tol_fracture)
           {
