@@ -120,6 +120,53 @@ TEST_CASE("fracture energy identified through zeta, strengths kept", "[calibrate
   CHECK(std::abs(a["compressive_strength_pa"].get<double>() / 16.5e6 - 1.0) < 0.05);
   CHECK(std::abs(a["youngs_modulus_pa"].get<double>() / 30e9 - 1.0) < 0.02);
   CHECK(r.file.calibration["method"].get<std::string>().find("zeta") != std::string::npos);
+  // with a G_f target, on the mean of two packings (seeds 1 and 2) by
+  // default: the values achieved are the means of the packings' own
+  REQUIRE(a.contains("packings"));
+  REQUIRE(a["packings"].size() == 2);
+  CHECK(r.file.calibration["sample"]["packings"].get<int>() == 2);
+  for (const char* k : {"tensile_strength_pa", "compressive_strength_pa", "fracture_energy_j_m2"})
+  {
+    const auto& p = a["packings"];
+    INFO(k);
+    CHECK(a[k].get<double>() == Approx(0.5 * (p[0][k].get<double>() + p[1][k].get<double>())).epsilon(1e-12));
+  }
+  CHECK(a["packings"][0]["seed"].get<unsigned>() == 1);
+  CHECK(a["packings"][1]["seed"].get<unsigned>() == 2);
+  // the two packings' tests ran: each seed appears in the history
+  int seed2 = 0;
+  for (const auto& h : r.history)
+    seed2 += h["seed"].get<unsigned>() == 2;
+  CHECK(seed2 > 0);
+}
+
+TEST_CASE("several packings: the strengths are the means of the packings' own", "[calibrate]")
+{
+  // T and C0 given (the paper's way): alpha, beta from elastic tests on the
+  // first packing, then tension and compression on each packing (seeds 1
+  // and 2); each packing's peaks are those of a plain run with its seed
+  // (the runs are deterministic), and the strengths reported their means
+  auto c = small();
+  c.given_local_strengths = true;
+  c.fixed.tensile = 3.3e6;
+  c.fixed.cohesion = 4.4e6;
+  c.packings = 2;
+  const auto r = demo::identify(c);
+  INFO(r.achieved.dump());
+  const auto& p = r.achieved["packings"];
+  REQUIRE(p.size() == 2);
+  demo::SampleConfig s = c.sample;
+  s.material = r.file.material;
+  s.quiet = true;
+  for (unsigned seed : {1u, 2u})
+  {
+    s.seed = seed;
+    s.test = "compression";
+    CHECK(p[seed - 1]["seed"].get<unsigned>() == seed);
+    CHECK(demo::run_sample(s)["peak_stress_pa"].get<double>() == p[seed - 1]["compressive_strength_pa"].get<double>());
+  }
+  for (const char* k : {"tensile_strength_pa", "compressive_strength_pa"})
+    CHECK(r.achieved[k].get<double>() == Approx(0.5 * (p[0][k].get<double>() + p[1][k].get<double>())).epsilon(1e-12));
 }
 
 TEST_CASE("unreachable targets are refused with the reachable range", "[calibrate][errors]")
@@ -143,6 +190,13 @@ TEST_CASE("unreachable targets are refused with the reachable range", "[calibrat
   c.target.fracture_energy = 60.0;
   c.elastic_only = true;
   CHECK_THROWS_WITH(demo::identify(c), Contains("fracture energy") && Contains("elastic-only"));
+  c = small();
+  c.packings = -1;
+  CHECK_THROWS_WITH(demo::identify(c), Contains("packings -1") && Contains(">= 1"));
+  c.packings = 2;
+  c.sample.packing_file = "some_packing.txt";
+  CHECK_THROWS_WITH(demo::identify(c), Contains("2 packings") && Contains("generator settings")
+                                           && Contains("some_packing.txt"));
   const auto bad = std::filesystem::temp_directory_path() / "dembridge_bad_material.json";
   std::ofstream(bad) << R"({"format": "dembridge-material-1", "youngs_modulus_pa": 3e10})";
   CHECK_THROWS_WITH(dem::read_material(bad), Contains("poisson_ratio"));

@@ -54,6 +54,10 @@ int main(int argc, char** argv)
   app.add_option("--radius-ratio", s.radius_ratio, "Rmax / Rmin")->capture_default_str();
   app.add_option("--seed", s.seed, "packing seed")->capture_default_str();
   app.add_option("--packing", s.packing_file, "use this 'x y z r' packing [m]");
+  app.add_option("--packings", c.packings,
+                 "identify the strengths and G_f on the mean over this many packings (seeds seed, "
+                 "seed + 1, ...); 0 = 2 with --fracture-energy, else 1")
+      ->capture_default_str();
   app.add_option("--links-per-sphere", s.links_per_sphere, "mean links per sphere (sets lambda)")
       ->capture_default_str();
   app.add_option("--strain-rate", s.strain_rate, "platen strain rate [1/s]")->capture_default_str();
@@ -65,7 +69,7 @@ int main(int argc, char** argv)
       ->capture_default_str();
   app.add_flag("--elastic-only", c.elastic_only, "identify alpha, beta, gamma only");
   app.add_flag("--checks", c.checks,
-               "then measure again at half the strain rate (< 1 % asked), on a second packing (seed + 1) "
+               "then measure again at half the strain rate (< 1 % asked), on a packing not used (seed + packings) "
                "and on a sample of twice the volume (E 2 %, nu 0.02, strengths 5 %)");
   double local_t = 0.0, local_c0 = 0.0;
   auto* opt_t = app.add_option("--local-tensile", local_t,
