@@ -44,7 +44,9 @@
 ///    strengths and G_f are means over two packings by default
 ///    (IdentifyConfig::packings): at zeta ~ 14 a single run's compression
 ///    peak moves by up to 4 % with the packing or the rate (the onset of
-///    the cascade of failures). G_f is measured on the same packings with
+///    the cascade of failures). The search's tests then run at T = the
+///    target sigma_t / 1.6, near the T that meets it (scale-free
+///    quantities; a test's duration grows with T). G_f is measured on the same packings with
 ///    a notch at mid-height (half the section kept), in tension until the
 ///    sample is separated: without a notch much of the dissipation is
 ///    spread through the volume before the peak and G_f grows with the
