@@ -56,129 +56,76 @@ struct Runner
   nlohmann::json run(const dem::Material& m, const std::string& test, bool elastic,
                      const std::string& out = "", bool peak_only = false)
   {
-    return run_all({Request{m, test, elastic, out, peak_only, 0}})[0];
+    return run(Request{m, test, elastic, out, peak_only, 0});
   }
 
-  /// The tests asked for, in order. A run with another C0 serves when it
-  /// did not reach the shear cap with either C0 (cohesion_demand_pa): it is
-  /// the same bit for bit. With peak_only it serves when it did not reach
-  /// the cap before its peak (cohesion_demand_at_peak_pa): the same run up
-  /// to the peak; the post-peak part may differ, so such a reuse is kept
-  /// apart (peak_done) and the final tests are always run.
-  std::vector<nlohmann::json> run_all(const std::vector<Request>& rq)
+  /// A run with another C0 serves when it did not reach the shear cap with
+  /// either C0 (cohesion_demand_pa): it is the same bit for bit. With
+  /// peak_only it serves when it did not reach the cap before its peak
+  /// (cohesion_demand_at_peak_pa): the same run up to the peak; the
+  /// post-peak part may differ, so such a reuse is kept apart (peak_done)
+  /// and the final tests are always run.
+  nlohmann::json run(const Request& r)
   {
-    const std::size_t n = rq.size();
-    std::vector<nlohmann::json> res(n);
-    std::vector<std::string> keys(n), rests(n);
-    std::vector<SampleConfig> cfgs(n);
-    std::vector<double> reused(n, -1.0); // C0 of the run reused; 0: cached; -1: to run
-    std::vector<std::size_t> todo;       // requests to simulate (the first of equal ones)
-    std::vector<std::size_t> same(n);    // the request whose result this one takes
-    for (std::size_t i = 0; i < n; ++i)
+    const dem::Material& m = r.m;
+    SampleConfig s = cfg.sample;
+    s.packing_file = files.at(r.packing);
+    s.material = m;
+    s.test = r.test;
+    s.quiet = true;
+    s.output_dir = r.out;
+    if (r.elastic)
     {
-      const Request& r = rq[i];
-      const dem::Material& m = r.m;
-      SampleConfig& s = cfgs[i];
-      s = cfg.sample;
-      s.packing_file = files.at(r.packing);
-      s.material = m;
-      s.test = r.test;
-      s.quiet = true;
-      s.output_dir = r.out;
-      if (r.elastic)
-      {
-        s.material.tensile = s.material.cohesion = 1e12; // no breakage
-        s.max_strain = 5e-5;
-      }
-      if (r.test == "fracture")
-      {
-        s.test = "tension";
-        s.ligament = cfg.ligament;
-        s.to_separation = true;
-        s.max_strain = 0.0; // 5e-3
-      }
-      std::ostringstream rest;
-      rest.precision(17);
-      rest << r.test << ' ' << r.elastic << ' ' << r.packing << ' ' << m.youngs_modulus << ' '
-           << m.poisson_ratio << ' ' << m.density << ' ' << m.micro.alpha << ' ' << m.micro.beta << ' '
-           << m.micro.gamma << ' ' << m.tensile << ' ' << m.zeta << ' ' << m.phi_i_deg << ' ' << m.phi_c_deg;
-      std::ostringstream key;
-      key.precision(17);
-      key << rest.str() << ' ' << m.cohesion;
-      rests[i] = rest.str();
-      keys[i] = key.str();
-      same[i] = i;
-      if (!r.out.empty())
-      {
-        todo.push_back(i);
-        continue;
-      }
-      if (auto it = done.find(keys[i]); it != done.end())
-      {
-        res[i] = it->second, reused[i] = 0.0;
-        continue;
-      }
-      if (auto it = peak_done.find(keys[i]); r.peak_only && it != peak_done.end())
-      {
-        res[i] = it->second, reused[i] = 0.0;
-        continue;
-      }
+      s.material.tensile = s.material.cohesion = 1e12; // no breakage
+      s.max_strain = 5e-5;
+    }
+    if (r.test == "fracture")
+    {
+      s.test = "tension";
+      s.ligament = cfg.ligament;
+      s.to_separation = true;
+      s.max_strain = 0.0; // 5e-3
+    }
+    std::ostringstream rest;
+    rest.precision(17);
+    rest << r.test << ' ' << r.elastic << ' ' << r.packing << ' ' << m.youngs_modulus << ' ' << m.poisson_ratio
+         << ' ' << m.density << ' ' << m.micro.alpha << ' ' << m.micro.beta << ' ' << m.micro.gamma << ' '
+         << m.tensile << ' ' << m.zeta << ' ' << m.phi_i_deg << ' ' << m.phi_c_deg;
+    std::ostringstream key;
+    key.precision(17);
+    key << rest.str() << ' ' << m.cohesion;
+    if (r.out.empty())
+    {
+      if (auto it = done.find(key.str()); it != done.end())
+        return it->second;
+      if (auto it = peak_done.find(key.str()); r.peak_only && it != peak_done.end())
+        return it->second;
       // the shear cap never reached, up to the peak or in the whole run
       const char* demand = r.peak_only ? "cohesion_demand_at_peak_pa" : "cohesion_demand_pa";
       if (!r.elastic)
-        for (const auto& [c0, x] : by_rest[rests[i]])
+        for (const auto& [c0, x] : by_rest[rest.str()])
         {
           const double d = x[demand].get<double>() * (1.0 + 1e-9);
           if (d < c0 && d < m.cohesion)
           {
-            res[i] = x, reused[i] = c0;
-            (r.peak_only ? peak_done : done)[keys[i]] = x;
-            break;
+            record(r, x, c0);
+            (r.peak_only ? peak_done : done)[key.str()] = x;
+            return x;
           }
         }
-      if (reused[i] >= 0.0)
-        continue;
-      for (std::size_t j : todo) // asked twice in this batch
-        if (keys[j] == keys[i] && rq[j].out.empty())
-          same[i] = j;
-      if (same[i] == i)
-        todo.push_back(i);
     }
-    simulate(todo, cfgs, res);
-    for (std::size_t i = 0; i < n; ++i)
+    auto x = run_sample(s);
+    if (r.out.empty())
     {
-      if (same[i] != i)
-      {
-        res[i] = res[same[i]], reused[i] = 0.0;
-        continue;
-      }
-      if (reused[i] == 0.0)
-        continue;
-      const Request& r = rq[i];
-      if (reused[i] < 0.0 && r.out.empty())
-      {
-        done[keys[i]] = res[i];
-        by_rest[rests[i]].emplace_back(r.m.cohesion, res[i]);
-      }
-      if (r.test == "fracture" && !res[i]["separated"].get<bool>())
-        throw std::runtime_error("the notched sample did not separate by a strain of "
-                                 + std::to_string(res[i]["final_strain"].get<double>())
-                                 + " (zeta = " + std::to_string(r.m.zeta) + "): no fracture energy");
-      record(r, res[i], std::max(reused[i], 0.0));
+      done[key.str()] = x;
+      by_rest[rest.str()].emplace_back(m.cohesion, x);
     }
-    return res;
-  }
-
-  /// Runs the tests `todo` of rq into res, one after the other, each on
-  /// all threads. (Running a batch's tests side by side, one thread each,
-  /// was measured on the 2-core VM: 8 % quicker for a batch of four, the
-  /// cores' throughput being the same either way, and a test left alone
-  /// ran on one thread: not kept.)
-  void simulate(const std::vector<std::size_t>& todo, const std::vector<SampleConfig>& cfgs,
-                std::vector<nlohmann::json>& res)
-  {
-    for (std::size_t i : todo)
-      res[i] = run_sample(cfgs[i]);
+    if (r.test == "fracture" && !x["separated"].get<bool>())
+      throw std::runtime_error("the notched sample did not separate by a strain of "
+                               + std::to_string(x["final_strain"].get<double>())
+                               + " (zeta = " + std::to_string(m.zeta) + "): no fracture energy");
+    record(r, x, 0.0);
+    return x;
   }
 
   void record(const Request& q, const nlohmann::json& r, double reused_from)
@@ -215,21 +162,15 @@ struct Runner
   };
   Means means(const dem::Material& m, bool compression, bool fracture)
   {
-    std::vector<Request> rq;
+    const double w = 1.0 / packings();
+    Means a;
     for (std::size_t p = 0; p < packings(); ++p)
     {
-      rq.push_back({m, "tension", false, "", true, p});
+      a.st += w * run({m, "tension", false, "", true, p})["peak_stress_pa"].get<double>();
       if (compression)
-        rq.push_back({m, "compression", false, "", true, p});
+        a.sc += w * run({m, "compression", false, "", true, p})["peak_stress_pa"].get<double>();
       if (fracture)
-        rq.push_back({m, "fracture", false, "", false, p});
-    }
-    const auto r = run_all(rq);
-    Means a;
-    for (std::size_t i = 0; i < r.size(); ++i)
-    {
-      const double v = r[i][rq[i].test == "fracture" ? "fracture_energy_j_m2" : "peak_stress_pa"].get<double>();
-      (rq[i].test == "tension" ? a.st : rq[i].test == "compression" ? a.sc : a.gf) += v / packings();
+        a.gf += w * run({m, "fracture", false, "", false, p})["fracture_energy_j_m2"].get<double>();
     }
     return a;
   }
@@ -266,32 +207,29 @@ nlohmann::json measure(Runner& R, const dem::Material& m, bool elastic_only, nlo
       *compression = c;
     return a;
   }
-  std::vector<Request> rq;
-  for (std::size_t p = 0; p < R.packings(); ++p)
-  {
-    rq.push_back({m, "tension", false, p == 0 ? out_t : "", false, p});
-    rq.push_back({m, "compression", false, p == 0 ? out_c : "", false, p});
-  }
-  const auto r = R.run_all(rq);
   double st = 0.0, sc = 0.0;
   nlohmann::json each = nlohmann::json::array();
   for (std::size_t p = 0; p < R.packings(); ++p)
   {
-    const double t = r[2 * p]["peak_stress_pa"].get<double>(), c = r[2 * p + 1]["peak_stress_pa"].get<double>();
+    const auto rt = R.run({m, "tension", false, p == 0 ? out_t : "", false, p});
+    const auto rc = R.run({m, "compression", false, p == 0 ? out_c : "", false, p});
+    const double t = rt["peak_stress_pa"].get<double>(), c = rc["peak_stress_pa"].get<double>();
     st += t / R.packings(), sc += c / R.packings();
     each.push_back({{"seed", R.cfg.sample.seed + p}, {"tensile_strength_pa", t}, {"compressive_strength_pa", c}});
+    if (p > 0)
+      continue;
+    // for information: the secant-like slope of the full compression test
+    // (5-30 % of the peak) already includes early link failures
+    a["compression_test_modulus_pa"] = rc["youngs_modulus_pa"];
+    if (tension)
+      *tension = rt;
+    if (compression)
+      *compression = rc;
   }
   a["tensile_strength_pa"] = st;
   a["compressive_strength_pa"] = sc;
-  // for information: the secant-like slope of the full compression test
-  // (5-30 % of the peak) already includes early link failures
-  a["compression_test_modulus_pa"] = r[1]["youngs_modulus_pa"];
   if (R.packings() > 1)
     a["packings"] = each;
-  if (tension)
-    *tension = r[0];
-  if (compression)
-    *compression = r[1];
   return a;
 }
 
@@ -507,8 +445,7 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
     throw std::runtime_error("packings " + std::to_string(cfg.packings)
                              + ": must be >= 1 (0: 2 with a fracture energy target, else 1)");
   const std::size_t n_packings = cfg.packings > 0 ? static_cast<std::size_t>(cfg.packings)
-                                 : t.fracture_energy > 0.0 && !cfg.sample.packing_file.empty() ? 1
-                                 : t.fracture_energy > 0.0 ? 2 : 1;
+                                 : t.fracture_energy > 0.0 && cfg.sample.packing_file.empty() ? 2 : 1;
   if (n_packings > 1 && !cfg.sample.packing_file.empty())
     throw std::runtime_error(std::to_string(n_packings) + " packings need the sample's generator settings "
                              "(seeds seed, seed + 1, ...), not a packing file (" + cfg.sample.packing_file + ")");
@@ -849,16 +786,14 @@ IdentifyResult identify(const IdentifyConfig& cfg0)
   res.achieved = measure(R, m, cfg.elastic_only, &res.tension, &res.compression, out("tension"), out("compression"));
   if (t.fracture_energy > 0.0)
   {
-    std::vector<Request> rq;
-    for (std::size_t p = 0; p < R.packings(); ++p)
-      rq.push_back({m, "fracture", false, p == 0 ? out("fracture") : "", false, p});
-    const auto f = R.run_all(rq);
-    res.fracture = f[0];
     double gf = 0.0;
-    for (std::size_t p = 0; p < f.size(); ++p)
+    for (std::size_t p = 0; p < R.packings(); ++p)
     {
-      const double g = f[p]["fracture_energy_j_m2"].get<double>();
-      gf += g / f.size();
+      const auto f = R.run({m, "fracture", false, p == 0 ? out("fracture") : "", false, p});
+      if (p == 0)
+        res.fracture = f;
+      const double g = f["fracture_energy_j_m2"].get<double>();
+      gf += g / R.packings();
       if (res.achieved.contains("packings"))
         res.achieved["packings"][p]["fracture_energy_j_m2"] = g;
     }
