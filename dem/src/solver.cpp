@@ -666,10 +666,11 @@ void DemSolver::update_held()
 {
   std::fill(_held.begin(), _held.end(), 0);
   for (const auto& m : _motions)
-    for (auto i : m.ids)
-      for (int k = 0; k < 6; ++k)
-        if (m.kind == MotionKind::fixed || (k < 3 && m.components[k]))
-          _held[6 * i + k] = 1;
+    if (!m.rotates || m.kind == MotionKind::fixed) // a hinged set moves as a plate
+      for (auto i : m.ids)
+        for (int k = 0; k < 6; ++k)
+          if (m.kind == MotionKind::fixed || (k < 3 && m.components[k]))
+            _held[6 * i + k] = 1;
   _held_dofs.clear();
   for (std::size_t i = 0; i < _p.size(); ++i)
     for (int k = 0; k < 3; ++k)
@@ -715,7 +716,30 @@ void DemSolver::add_motion(ParticleMotion m)
         if (std::find(f.ids.begin(), f.ids.end(), i) != f.ids.end())
           throw std::runtime_error("condition '" + m.name + "' holds sphere " + std::to_string(i)
                                    + " of the loading plate '" + f.name + "': a plate's spheres must move freely");
+  const bool hinged = m.rotates && m.kind != MotionKind::fixed;
+  for (const auto& o : _motions)
+  {
+    if (!hinged && !(o.rotates && o.kind != MotionKind::fixed))
+      continue;
+    for (auto i : m.ids)
+      if (std::find(o.ids.begin(), o.ids.end(), i) != o.ids.end())
+        throw std::runtime_error("condition '" + m.name + "' and condition '" + o.name + "' share sphere "
+                                 + std::to_string(i) + ": a hinged (rotating) set shares no sphere");
+  }
+  // a hinged set's mean velocity, from which its first reaction is taken
+  std::array<double, 3> v{0.0, 0.0, 0.0};
+  double mass = 0.0;
+  for (auto i : m.ids)
+  {
+    mass += _p.m[i];
+    for (int k = 0; k < 3; ++k)
+      v[k] += _p.m[i] * _p.v[3 * i + k];
+  }
+  for (int k = 0; k < 3; ++k)
+    v[k] /= mass;
   _motions.push_back(std::move(m));
+  _motion_reac.push_back({0.0, 0.0, 0.0});
+  _motion_vprev.push_back(v);
   update_held();
 }
 
@@ -725,6 +749,8 @@ void DemSolver::remove_motion(const std::string& name)
                                [&](const ParticleMotion& m) { return m.name == name; });
   if (it == _motions.end())
     throw std::runtime_error("remove_motion: no condition named '" + name + "'");
+  _motion_reac.erase(_motion_reac.begin() + (it - _motions.begin()));
+  _motion_vprev.erase(_motion_vprev.begin() + (it - _motions.begin()));
   _motions.erase(it);
   update_held();
 }
@@ -748,6 +774,13 @@ void DemSolver::add_force(ParticleForce f)
         if (_held[6 * i + k])
           throw std::runtime_error("force '" + f.name + "': sphere " + std::to_string(i)
                                    + " of the loading plate is held by a condition; a plate's spheres must move freely");
+    for (const auto& o : _motions)
+      if (o.rotates && o.kind != MotionKind::fixed)
+        for (auto i : f.ids)
+          if (std::find(o.ids.begin(), o.ids.end(), i) != o.ids.end())
+            throw std::runtime_error("force '" + f.name + "': sphere " + std::to_string(i)
+                                     + " of the loading plate moves with the hinged condition '" + o.name
+                                     + "'; a plate's spheres must move freely");
   }
   _forces.push_back(std::move(f));
   // external force arrays only once there is an external force
@@ -770,6 +803,103 @@ void external(const std::vector<ParticleForce>& forces, double t, std::vector<do
 }
 } // namespace
 
+namespace
+{
+/// The motions of a plate (a set of spheres) along a unit direction d: its
+/// translation, and (with `rotates`) its two rotations normal to d, whose
+/// component along d is linear in the position across d. The rotation
+/// modes are mass-orthonormalised (Gram-Schmidt); one the spheres do not
+/// span (all on one line across d, or a single sphere) is dropped, as it
+/// moves no sphere.
+struct PlateModes
+{
+  double mass = 0.0;
+  int nrot = 0;
+  std::vector<std::array<double, 2>> phi; ///< per sphere, the rotation modes' v_d
+};
+
+PlateModes plate_modes(const Particles& p, const std::vector<std::int32_t>& ids, const double* d,
+                       bool rotates)
+{
+  PlateModes pm;
+  double c[3] = {0.0, 0.0, 0.0};
+  for (auto i : ids)
+  {
+    pm.mass += p.m[i];
+    for (int k = 0; k < 3; ++k)
+      c[k] += p.m[i] * p.x[3 * i + k];
+  }
+  if (!rotates)
+    return pm;
+  for (int k = 0; k < 3; ++k)
+    c[k] /= pm.mass;
+  // e0, e1: an orthonormal pair normal to d
+  double e[2][3], t[3] = {0.0, 0.0, 0.0};
+  t[std::abs(d[0]) < 0.9 ? 0 : 1] = 1.0;
+  const double td = dot3(t, d);
+  for (int k = 0; k < 3; ++k)
+    e[0][k] = t[k] - td * d[k];
+  const double n0 = std::sqrt(dot3(e[0], e[0]));
+  for (int k = 0; k < 3; ++k)
+    e[0][k] /= n0;
+  e[1][0] = d[1] * e[0][2] - d[2] * e[0][1];
+  e[1][1] = d[2] * e[0][0] - d[0] * e[0][2];
+  e[1][2] = d[0] * e[0][1] - d[1] * e[0][0];
+  pm.phi.resize(ids.size());
+  double s2 = 0.0;
+  for (std::size_t q = 0; q < ids.size(); ++q)
+  {
+    const std::int32_t i = ids[q];
+    const double r[3] = {p.x[3 * i] - c[0], p.x[3 * i + 1] - c[1], p.x[3 * i + 2] - c[2]};
+    pm.phi[q] = {dot3(r, e[0]), dot3(r, e[1])};
+    s2 += p.m[i] * (pm.phi[q][0] * pm.phi[q][0] + pm.phi[q][1] * pm.phi[q][1]);
+  }
+  const double tol = 1e-12 * s2;
+  for (int r = 0; r < 2; ++r)
+  {
+    if (r == 1 && pm.nrot == 1)
+    {
+      double p01 = 0.0;
+      for (std::size_t q = 0; q < ids.size(); ++q)
+        p01 += p.m[ids[q]] * pm.phi[q][0] * pm.phi[q][1];
+      for (auto& ph : pm.phi)
+        ph[1] -= p01 * ph[0];
+    }
+    double n2 = 0.0;
+    for (std::size_t q = 0; q < ids.size(); ++q)
+      n2 += p.m[ids[q]] * pm.phi[q][r] * pm.phi[q][r];
+    if (!(n2 > tol))
+      continue;
+    const double inv = 1.0 / std::sqrt(n2);
+    for (auto& ph : pm.phi)
+      ph[pm.nrot] = ph[r] * inv;
+    ++pm.nrot;
+  }
+  return pm;
+}
+
+/// Sets the spheres' velocity components along d to vbar plus the plate's
+/// rotations fitted (mass-weighted least squares) to their present ones.
+void move_as_plate(Particles& p, const std::vector<std::int32_t>& ids, const double* d,
+                   const PlateModes& pm, double vbar)
+{
+  double g[2] = {0.0, 0.0};
+  for (int r = 0; r < pm.nrot; ++r)
+    for (std::size_t q = 0; q < ids.size(); ++q)
+      g[r] += p.m[ids[q]] * pm.phi[q][r] * dot3(d, &p.v[3 * ids[q]]);
+  for (std::size_t q = 0; q < ids.size(); ++q)
+  {
+    const std::int32_t i = ids[q];
+    double target = vbar;
+    for (int r = 0; r < pm.nrot; ++r)
+      target += g[r] * pm.phi[q][r];
+    const double dv = target - dot3(d, &p.v[3 * i]);
+    for (int k = 0; k < 3; ++k)
+      p.v[3 * i + k] += dv * d[k];
+  }
+}
+} // namespace
+
 void DemSolver::tie_plates()
 {
   for (const auto& f : _forces)
@@ -778,19 +908,11 @@ void DemSolver::tie_plates()
       continue;
     const double len = std::sqrt(dot3(f.direction.data(), f.direction.data()));
     const double d[3] = {f.direction[0] / len, f.direction[1] / len, f.direction[2] / len};
-    double mv = 0.0, m = 0.0;
+    const auto pm = plate_modes(_p, f.ids, d, f.plate_rotates);
+    double mv = 0.0;
     for (auto i : f.ids)
-    {
       mv += _p.m[i] * dot3(d, &_p.v[3 * i]);
-      m += _p.m[i];
-    }
-    const double vbar = mv / m;
-    for (auto i : f.ids)
-    {
-      const double dv = vbar - dot3(d, &_p.v[3 * i]);
-      for (int k = 0; k < 3; ++k)
-        _p.v[3 * i + k] += dv * d[k];
-    }
+    move_as_plate(_p, f.ids, d, pm, mv / pm.mass);
   }
 }
 
@@ -830,6 +952,42 @@ void DemSolver::step()
   end_step();
 }
 
+void DemSolver::move_hinged(std::size_t motion, double t_half, double t_new, bool begin)
+{
+  const auto& m = _motions[motion];
+  for (int k = 0; k < 3; ++k)
+  {
+    if (!m.components[k])
+      continue;
+    const double d[3] = {k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0, k == 2 ? 1.0 : 0.0};
+    const auto pm = plate_modes(_p, m.ids, d, true);
+    double vbar = 0.0, force = 0.0;
+    for (auto i : m.ids)
+    {
+      if (m.kind == MotionKind::displacement)
+        vbar += _p.m[i] * (_p.x0[3 * i + k] + m.value(t_new) - _p.x[3 * i + k]);
+      force += _p.f[3 * i + k] + (_fext.empty() ? 0.0 : _fext[3 * i + k]);
+    }
+    vbar = m.kind == MotionKind::velocity ? m.value(t_half) : vbar / (pm.mass * _dt);
+    // at the full step, a displacement's mean keeps its half-step velocity
+    // (as held translations do: the kick is not theirs)
+    if (!begin && m.kind == MotionKind::displacement)
+      vbar = _motion_vprev[motion][k];
+    if (begin)
+    {
+      // the reaction on the plate's mean motion, as for held translations:
+      // M (v(n+1/2) - v(n-1/2)) / dt = F(n) - c M v(n+1/2) + R, and its
+      // work over the drift R v(n+1/2) dt
+      double& vprev = _motion_vprev[motion][k];
+      const double R = pm.mass * (vbar - vprev) / _dt - force + _c * pm.mass * vbar;
+      _motion_reac[motion][k] = R;
+      _e.prescribed_work += _dt * R * vbar;
+      vprev = vbar;
+    }
+    move_as_plate(_p, m.ids, d, pm, vbar);
+  }
+}
+
 void DemSolver::begin_step()
 {
   const double t0 = omp_get_wtime();
@@ -844,6 +1002,12 @@ void DemSolver::begin_step()
   kick(0.5 * dt);
   tie_plates();
   for (const auto& m : _motions)
+  {
+    if (m.rotates && m.kind != MotionKind::fixed)
+    {
+      move_hinged(&m - _motions.data(), _t + 0.5 * dt, t_new, true);
+      continue;
+    }
     for (auto i : m.ids)
       for (int k = 0; k < 3; ++k)
       {
@@ -858,6 +1022,7 @@ void DemSolver::begin_step()
                   ? m.value(_t + 0.5 * dt)
                   : (_p.x0[3 * i + k] + m.value(t_new) - _p.x[3 * i + k]) / dt;
       }
+  }
   _in_step = true;
   _time.integration += omp_get_wtime() - t0;
 }
@@ -936,11 +1101,14 @@ void DemSolver::end_step()
   kick(0.5 * dt);
   tie_plates();
   for (const auto& m : _motions)
-    if (m.kind == MotionKind::velocity)
+    if (m.kind == MotionKind::velocity && !m.rotates)
       for (auto i : m.ids)
         for (int k = 0; k < 3; ++k)
           if (m.components[k])
             _p.v[3 * i + k] = m.value(t_new);
+  for (std::size_t q = 0; q < _motions.size(); ++q)
+    if (_motions[q].rotates && _motions[q].kind != MotionKind::fixed)
+      move_hinged(q, t_new, t_new, false);
   _t = t_new;
   ++_steps;
   _e.external_work += w_ext;
@@ -984,6 +1152,8 @@ std::array<double, 3> DemSolver::reaction(const std::string& name) const
   for (const auto& m : _motions)
     if (m.name == name)
     {
+      if (m.rotates && m.kind != MotionKind::fixed)
+        return _motion_reac[&m - _motions.data()];
       std::array<double, 3> r{0, 0, 0};
       for (auto i : m.ids)
         for (int k = 0; k < 3; ++k)

@@ -132,6 +132,16 @@ struct ParticleMotion
   MotionKind kind = MotionKind::fixed;
   std::array<bool, 3> components{true, true, true}; ///< for velocity/displacement
   History value;
+  /// For velocity/displacement: the set follows value(t) as a plate hinged
+  /// at its centroid: for each chosen component, the set's mass-weighted mean
+  /// follows value(t) and its rotations normal to that component stay free
+  /// (the component is an affine function of position, its slopes fitted to
+  /// the spheres' own velocities as for ParticleForce::plate_rotates).
+  /// Its spheres are kicked by their forces like free ones, then moved as
+  /// the plate; its reaction is the force on the plate's mean motion. It
+  /// shares no sphere with another condition or a loading plate. Without it
+  /// each sphere follows value(t): the set cannot rotate.
+  bool rotates = false;
 };
 
 /// External force on each particle of a set: direction * value(t) [N].
@@ -149,6 +159,16 @@ struct ParticleForce
   /// surface sphere far out). Other components stay free. The set must not
   /// share spheres with a kinematic condition.
   bool plate = false;
+  /// With `plate`: the plate may also rotate, as one loaded through a ball
+  /// joint: the velocity components along `direction` are made an affine
+  /// function of position, v_d = V + g . (x - c) with g normal to the load
+  /// (the rigid rotations' share of v_d), fitted by mass-weighted least
+  /// squares (so momentum and the moments about the centroid c are kept).
+  /// The plate then carries the load and no moment. Without it, the plate
+  /// only translates: it holds its own rotation, and so the end of a bent
+  /// bar (a plate of end spheres a centimetre deep in x clamps that layer's
+  /// rotation and takes ~2 % of the moment).
+  bool plate_rotates = false;
 };
 
 /// Energy budget [J]: kinetic + elastic + softening + breakage + friction +
@@ -233,6 +253,9 @@ private:
   std::vector<std::int32_t> _held_dofs; // 3 i + k of held translations (sorted); _fold,
                                         // _vold, _reac: one value per held dof
   std::vector<double> _fext, _fext_old, _reac, _fold, _vold, _part;
+  // per motion: a hinged plate's reaction and its last half-step mean velocity
+  std::vector<std::array<double, 3>> _motion_reac, _motion_vprev;
+  void move_hinged(std::size_t motion, double t_half, double t_new, bool begin);
   ForceScratch _scratch;
   double _dt, _c, _t = 0.0;
   std::int64_t _steps = 0;
