@@ -961,24 +961,27 @@ void DemSolver::move_hinged(std::size_t motion, double t_half, double t_new, boo
       continue;
     const double d[3] = {k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0, k == 2 ? 1.0 : 0.0};
     const auto pm = plate_modes(_p, m.ids, d, true);
-    double vbar = 0.0, force = 0.0;
-    for (auto i : m.ids)
+    double& vprev = _motion_vprev[motion][k];
+    double vbar = 0.0;
+    if (m.kind == MotionKind::velocity)
+      vbar = m.value(t_half);
+    else if (!begin)
+      vbar = vprev; // at the full step a displacement's mean keeps its half-step
+                    // velocity, as held translations do (the kick is not theirs)
+    else
     {
-      if (m.kind == MotionKind::displacement)
+      for (auto i : m.ids)
         vbar += _p.m[i] * (_p.x0[3 * i + k] + m.value(t_new) - _p.x[3 * i + k]);
-      force += _p.f[3 * i + k] + (_fext.empty() ? 0.0 : _fext[3 * i + k]);
+      vbar /= pm.mass * _dt;
     }
-    vbar = m.kind == MotionKind::velocity ? m.value(t_half) : vbar / (pm.mass * _dt);
-    // at the full step, a displacement's mean keeps its half-step velocity
-    // (as held translations do: the kick is not theirs)
-    if (!begin && m.kind == MotionKind::displacement)
-      vbar = _motion_vprev[motion][k];
     if (begin)
     {
       // the reaction on the plate's mean motion, as for held translations:
       // M (v(n+1/2) - v(n-1/2)) / dt = F(n) - c M v(n+1/2) + R, and its
       // work over the drift R v(n+1/2) dt
-      double& vprev = _motion_vprev[motion][k];
+      double force = 0.0;
+      for (auto i : m.ids)
+        force += _p.f[3 * i + k] + (_fext.empty() ? 0.0 : _fext[3 * i + k]);
       const double R = pm.mass * (vbar - vprev) / _dt - force + _c * pm.mass * vbar;
       _motion_reac[motion][k] = R;
       _e.prescribed_work += _dt * R * vbar;

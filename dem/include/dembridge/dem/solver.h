@@ -241,7 +241,7 @@ public:
 private:
   void kick(double h);
   void update_held();
-  void tie_plates(); // loading plates: equal velocity along the load
+  void tie_plates(); // loading plates: one velocity along the load (and rotations, if free)
   Particles& _p;
   Links& _l;
   Material _mat;
@@ -255,6 +255,9 @@ private:
   std::vector<double> _fext, _fext_old, _reac, _fold, _vold, _part;
   // per motion: a hinged plate's reaction and its last half-step mean velocity
   std::vector<std::array<double, 3>> _motion_reac, _motion_vprev;
+  // a hinged condition's spheres moved as a plate whose mean follows the
+  // history: at the half step (begin, with its reaction and work), or at
+  // the full step
   void move_hinged(std::size_t motion, double t_half, double t_new, bool begin);
   ForceScratch _scratch;
   double _dt, _c, _t = 0.0;
