@@ -1,6 +1,7 @@
 // Bonded assemblies: links, Newton's third law, objectivity, energy
 // conservation, breakage into contacts, time step, bad input.
 #include "dembridge/dem/assembly.h"
+#include "dembridge/dem/skin.h"
 #include "dembridge/dem/solver.h"
 
 #include <catch2/catch.hpp>
@@ -723,6 +724,65 @@ TEST_CASE("hinged displacement condition: the mean follows the history, the rota
                     Contains("'pull'") && Contains("sphere 3"));
   CHECK_THROWS_WITH(s.add_force({"p", {5}, {1.0, 0.0, 0.0}, [](double) { return 1.0; }, true}),
                     Contains("hinged condition 'pull'") && Contains("sphere 5"));
+}
+
+TEST_CASE("skin compensation: the links of the face spheres stiffened by the bulk's links per sphere", "[dem]")
+{
+  // Simple cubic lattice of equal spheres (8 a side, spacing 2R): linked to
+  // their 6 nearest neighbours (lambda 1.01), so a sphere in the bulk has 6
+  // links, one on a face 5, on an edge 4, at a corner 3. With the skin one
+  // layer deep (1.5 R: the next layer's centres are 3 R in), the factors are
+  // 6/5, 6/4 and 6/3, and a link takes the mean of its two spheres'.
+  const int n = 8;
+  const double R = 1e-3;
+  std::vector<double> x, r;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k)
+      {
+        x.insert(x.end(), {(2 * i + 1) * R, (2 * j + 1) * R, (2 * k + 1) * R});
+        r.push_back(R);
+      }
+  Material m = concrete();
+  auto p = make_particles(x, r, 2400.0, 0.52);
+  auto l = create_links(p, 1.01, m);
+  REQUIRE(l.size() == static_cast<std::size_t>(3 * n * n * (n - 1)));
+  const auto before = l;
+  const auto box = box_region({0.0, 0.0, 0.0}, {2 * n * R, 2 * n * R, 2 * n * R});
+  const auto s = compensate_skin(p, l, box, 1.5 * R);
+  CHECK(s.bulk_links == 6.0);
+  CHECK(s.spheres == static_cast<std::size_t>(n * n * n - (n - 2) * (n - 2) * (n - 2)));
+  CHECK_THAT(s.max_factor, WithinRel(2.0, 1e-15));
+  // sphere (i, j, k) -> its number of boundary coordinates -> factor
+  auto factor = [&](std::int32_t q) {
+    const int c[3] = {q / (n * n), (q / n) % n, q % n};
+    int b = 0;
+    for (int d = 0; d < 3; ++d)
+      b += c[d] == 0 || c[d] == n - 1;
+    return 6.0 / (6 - b);
+  };
+  int seen[4] = {0, 0, 0, 0}; // links by kind: bulk-bulk, face-face, face-bulk, corner-edge
+  for (std::size_t k = 0; k < l.size(); ++k)
+  {
+    const double fa = factor(l.a[k]), fb = factor(l.b[k]);
+    const double g = 0.5 * (fa + fb);
+    INFO("link " << k << ": spheres " << l.a[k] << ", " << l.b[k]);
+    CHECK_THAT(l.kn[k], WithinRel(g * before.kn[k], 1e-15));
+    CHECK_THAT(l.ks[k], WithinRel(g * before.ks[k], 1e-15));
+    seen[0] += fa == 1.0 && fb == 1.0;
+    seen[1] += fa == 1.2 && fb == 1.2;
+    seen[2] += (fa == 1.2) != (fb == 1.2) && (fa == 1.0 || fb == 1.0);
+    seen[3] += (fa == 2.0 && fb == 1.5) || (fa == 1.5 && fb == 2.0);
+  }
+  // every kind of link was met (24 corner-edge links: 3 per corner)
+  CHECK(seen[0] > 0);
+  CHECK(seen[1] > 0);
+  CHECK(seen[2] > 0);
+  CHECK(seen[3] == 24);
+  CHECK(s.links == l.size() - static_cast<std::size_t>(seen[0]));
+  // a skin depth must be given
+  CHECK_THROWS_WITH(compensate_skin(p, l, box, 0.0), Contains("skin depth 0"));
+  CHECK_THROWS_WITH(compensate_skin(p, l, box, std::nan("")), Contains("skin depth"));
 }
 
 TEST_CASE("neighbour list: rebuilt only after a move of half the skin", "[dem]")

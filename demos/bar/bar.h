@@ -44,6 +44,7 @@ struct BarConfig
   double probe_overlap_fe = 0.45; ///< the same probe in the FE model [m]
   std::string material;           ///< DE parameter file (from calibrate)
   double fe_youngs_modulus = 0.0; ///< E of the FE side and of beam theory [Pa]; 0 = the file's measured E
+  bool skin_compensation = true;  ///< stiffen the links of the spheres near the faces (dem/skin.h)
   std::string cell = "quadrilateral";
   double static_force = 0.0;      ///< [N]; 0 = 100 kN tension, 20 kN bending
   double damping = -1.0;          ///< static damping [1/s]; < 0 = 2 omega_1 (beam theory)
@@ -55,6 +56,10 @@ struct BarConfig
   std::string output;             ///< folder for history.csv, shape.csv, XDMF; empty = none
   bool quiet = false;             ///< no progress lines
 };
+
+/// Checks the options that need no run (names, sizes, positions).
+/// @throws std::runtime_error naming the value and what is allowed.
+void check_config(const BarConfig& c);
 
 /// Runs one case; returns the summary (keys of the validation issue: model,
 /// load, regime, particles, shell_nodes, probe_0_75 and probe_0_4351 with

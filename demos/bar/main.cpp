@@ -43,7 +43,8 @@ int main(int argc, char** argv)
   app.add_option("--probe-overlap", c.probe_overlap, "probe in the overlap (de, coupled models) [m]")->capture_default_str();
   app.add_option("--probe-overlap-fe", c.probe_overlap_fe, "the same probe in the FE model [m]")->capture_default_str();
   app.add_option("--material", c.material, "DE parameter file from calibrate (the FE side takes its measured E, nu, density)")->capture_default_str();
-  app.add_option("--fe-youngs-modulus", c.fe_youngs_modulus, "E of the FE side and of beam theory [Pa]; 0 = the material file's measured E (--compare: 0 = measured on the DE bar in static tension)")->capture_default_str();
+  app.add_option("--fe-youngs-modulus", c.fe_youngs_modulus, "E of the FE side and of beam theory [Pa]; 0 = measured on the DE bar in static tension (a DE run first)")->capture_default_str();
+  app.add_option("--skin-compensation", c.skin_compensation, "stiffen the links of the spheres within 2 Rmax of a face by their bulk's links per sphere over their own (true | false)")->capture_default_str();
   app.add_option("--static-force", c.static_force, "static end force [N]; 0 = 100 kN (tension), 20 kN (bending)")->capture_default_str();
   app.add_option("--damping", c.damping, "static damping [1/s]; < 0 = critical for the first mode (2 omega_1, beam theory)")->capture_default_str();
   app.add_option("--end-displacement", c.end_displacement, "dynamic end displacement d0 [m]; 0 = 5e-5 (tension), 2e-4 (bending)")->capture_default_str();
@@ -59,8 +60,22 @@ int main(int argc, char** argv)
   return demo::run_guarded(argc, argv, [&]
   {
     demo::echo_options(app);
+    demo::check_config(c);
     if (!compare)
     {
+      if (c.fe_youngs_modulus == 0.0)
+      {
+        // the E the identified parameters give on this bar's packing
+        demo::BarConfig t = c;
+        t.model = "de";
+        t.load = "tension";
+        t.regime = "static";
+        t.output.clear();
+        t.quiet = true;
+        c.fe_youngs_modulus = demo::measured_modulus(demo::run_bar(t));
+        std::cout << "# E measured on the DE bar in static tension: " << c.fe_youngs_modulus
+                  << " Pa (FE side and beam theory)" << std::endl;
+      }
       const auto out = demo::run_bar(c);
       std::cout << out.dump(2) << std::endl;
       if (!summary.empty())
