@@ -188,7 +188,7 @@ void CoupledSolver::start(std::span<const double> u_fe, std::span<const double> 
   _multiplier_energy = 0.0;
 }
 
-double CoupledSolver::step()
+double CoupledSolver::step(bool full_step_velocities)
 {
   const double t0 = now_s();
   _fe_solver->begin_step();
@@ -206,7 +206,8 @@ double CoupledSolver::step()
   // projected anyway), but v(n+1) -- written out, and in the kinetic
   // energy -- then satisfies the constraint instead of carrying the
   // unconstrained dt/2 a of the lightest (floored) masses.
-  correct(false);
+  if (full_step_velocities)
+    correct(false);
   const double t6 = now_s();
   _time.fe += (t1 - t0) + (t4 - t3);
   _time.de += (t2 - t1) + (t5 - t4);

@@ -400,7 +400,9 @@ nlohmann::json run_bar(const BarConfig& c)
   for (std::int64_t k = 1; k <= nsteps; ++k)
   {
     if (coupled)
-      coupled->step();
+      // v(n+1) projected where it is written, and every step of the damped
+      // static runs (undamped, skipping it leaves the motion unchanged)
+      coupled->step(!dynamic || k % every == 0 || k == nsteps);
     else if (fes)
     {
       const double s0 = clock.seconds();
