@@ -546,6 +546,10 @@ nlohmann::json run_bar(const BarConfig& c)
                                      + de_alone->timings().integration}};
   else
     out["step_time_s"] = {{"fe", step_clock}};
+  if (des)
+    out["de_step_split_s"] = {{"forces", des->timings().forces},
+                              {"neighbours", des->timings().neighbours},
+                              {"integration", des->timings().integration}};
   out["wall_s"] = clock.seconds();
   return out;
 }
