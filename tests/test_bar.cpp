@@ -27,8 +27,7 @@ demo::BarConfig reduced(const std::string& model, const std::string& load, const
 TEST_CASE("bar, reduced: static shapes against beam theory, dynamic frequencies agree", "[bar]")
 {
   // the E the identified parameters give on this packing: DE static tension
-  auto t = reduced("de", "tension", "static");
-  const double E = demo::measured_modulus(demo::run_bar(t));
+  const double E = demo::bar_modulus(reduced("de", "tension", "static"));
   INFO("E measured on the DE bar " << E << " Pa");
   // The identification's 30 GPa is a section average of the calibration
   // cylinder (platen force over its area), skin included; this bar's skin is
@@ -101,11 +100,9 @@ TEST_CASE("bar, reduced: without the skin compensation the DE bar is soft in ben
   // the tip's F span^3 / (3 E I). The skin's depth and softness are known to
   // about half: the error must lie in [0.5, 1.5] x the estimate. With the
   // compensation (test above) the same bar is within 2 %.
-  auto t = reduced("de", "tension", "static");
-  t.skin_compensation = false;
   auto c = reduced("de", "bending", "static");
   c.skin_compensation = false;
-  c.fe_youngs_modulus = demo::measured_modulus(demo::run_bar(t));
+  c.fe_youngs_modulus = demo::bar_modulus(c);
   const auto r = demo::run_bar(c);
   const double err = r.at("static_relative_error").get<double>();
   const double sk = 7.0 / 12.0, s = c.mean_radius / c.width;

@@ -206,7 +206,7 @@ double CoupledSolver::step(bool full_step_velocities)
   // projected anyway), but v(n+1) -- written out, and in the kinetic
   // energy -- then satisfies the constraint instead of carrying the
   // unconstrained dt/2 a of the lightest (floored) masses.
-  if (full_step_velocities)
+  if (full_step_velocities || _fe_solver->damping() > 0.0 || _de_solver->damping() > 0.0)
     correct(false);
   const double t6 = now_s();
   _time.fe += (t1 - t0) + (t4 - t3);

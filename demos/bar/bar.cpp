@@ -143,6 +143,16 @@ double measured_modulus(const nlohmann::json& run)
   return run.at("measured_youngs_modulus_pa").get<double>();
 }
 
+double bar_modulus(BarConfig c)
+{
+  c.model = "de";
+  c.load = "tension";
+  c.regime = "static";
+  c.output.clear();
+  c.quiet = true;
+  return measured_modulus(run_bar(c));
+}
+
 double bar_first_frequency(const BarConfig& c, double E, double nu, double rho)
 {
   if (c.load == "tension")
@@ -400,9 +410,7 @@ nlohmann::json run_bar(const BarConfig& c)
   for (std::int64_t k = 1; k <= nsteps; ++k)
   {
     if (coupled)
-      // v(n+1) projected where it is written, and every step of the damped
-      // static runs (undamped, skipping it leaves the motion unchanged)
-      coupled->step(!dynamic || k % every == 0 || k == nsteps);
+      coupled->step(k % every == 0 || k == nsteps); // v(n+1) is read where frames are written
     else if (fes)
     {
       const double s0 = clock.seconds();

@@ -74,6 +74,11 @@ nlohmann::json run_bar(const BarConfig& c);
 /// de / tension / static run, which holds it as measured_youngs_modulus_pa.
 double measured_modulus(const nlohmann::json& run);
 
+/// The E the DE bar of c's sizes, seed and skin compensation shows in
+/// static tension [Pa]: a de / tension / static run of c (quiet, no output)
+/// and its measured_modulus. The default E of the FE side and of beam theory.
+double bar_modulus(BarConfig c);
+
 /// Beam-theory first frequency of the bar for the load [Hz].
 double bar_first_frequency(const BarConfig& c, double E, double nu, double rho);
 

@@ -86,13 +86,14 @@ public:
   /// made compatible by one correction, then both sides start.
   void start(std::span<const double> u_fe, std::span<const double> v_fe);
   /// One coupled step; returns the constraint residual after the correction [m/s].
-  /// `full_step_velocities`: also project v(n+1) onto the constraint (a
-  /// second multiplier solve). Without damping the positions do not depend
-  /// on it -- the next half-step velocities are projected anyway, and the
-  /// projection is linear -- so an undamped run that reads no velocity after
-  /// this step (no output frame, no energy) may skip it (tested: the same
-  /// motion to 1e-12). With damping it changes the path: the shell damps
-  /// with v(n+1/2), the spheres with v(n+1).
+  /// `full_step_velocities`: project v(n+1) onto the constraint too (a
+  /// second multiplier solve); false when no velocity is read after this
+  /// step (no output frame, no energy). Without damping the positions do
+  /// not depend on it -- the next half-step velocities are projected anyway,
+  /// and the projection is linear -- so it is then skipped (tested: the
+  /// same motion to 1e-12). With damping on either side it is always made:
+  /// it changes the path there (the shell damps with v(n+1/2), the spheres
+  /// with v(n+1)).
   double step(bool full_step_velocities = true);
 
   double dt() const { return _dt; }

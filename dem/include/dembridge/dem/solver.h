@@ -228,6 +228,7 @@ public:
   std::int64_t steps() const { return _steps; }
   double dt() const { return _dt; }
   void set_damping(double c);
+  double damping() const { return _c; } ///< [1/s]
   /// From now on, track the cohesion demand (ForceCounters::cohesion_demand).
   void track_cohesion_demand() { _counters.track_cohesion = true; }
   /// The cohesion demand so far [Pa] (0 unless tracked).

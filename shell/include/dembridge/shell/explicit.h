@@ -131,6 +131,7 @@ public:
   std::int64_t steps() const { return _steps; }
   double dt() const { return _dt; }
   void set_damping(double c);
+  double damping() const { return _c; } ///< [1/s]
   std::span<const double> u() const { return _u; }
   std::span<const double> v() const { return _v; }
   std::span<const double> mass() const { return _m; }
