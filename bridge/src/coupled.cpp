@@ -111,7 +111,7 @@ CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& 
       for (std::size_t q = 0; q < _ids.size(); ++q)
         for (int d = 0; d < 3; ++d)
           _v_de[3 * q + d] = z[nf + 3 * _ids[q] + d];
-      projector.correct(_v_de, z.first(nf));
+      projector.correct(_v_de, z.first(nf), false);
       for (std::size_t q = 0; q < _ids.size(); ++q)
         for (int d = 0; d < 3; ++d)
           z[nf + 3 * _ids[q] + d] = _v_de[3 * q + d];
@@ -153,7 +153,7 @@ double particle_critical_time_step(const dem::Particles& p, const dem::Links& l,
   return 2.0 / std::sqrt(lmax);
 }
 
-void CoupledSolver::correct(bool half_step)
+void CoupledSolver::correct(bool half_step, bool residual)
 {
   auto v_fe = _fe_solver->v_mut();
   for (std::size_t q = 0; q < _ids.size(); ++q)
@@ -161,13 +161,14 @@ void CoupledSolver::correct(bool half_step)
       _v_de[3 * q + d] = _p.v[3 * _ids[q] + d];
   // the residual is checked after the half-step correction (the one the
   // positions move with); the full-step one only makes v(n+1) consistent
-  const double r = _mult->correct(_v_de, v_fe, half_step);
+  const double r = _mult->correct(_v_de, v_fe, half_step && residual);
   for (std::size_t q = 0; q < _ids.size(); ++q)
     for (int d = 0; d < 3; ++d)
       _p.v[3 * _ids[q] + d] = _v_de[3 * q + d];
   if (!half_step)
     return;
-  _residual = r;
+  if (residual)
+    _residual = r;
   // work of the multipliers on the shell over the step: dt lambda . G_FE v_FE
   // (= dt lambda . v_DE, the constraint holding)
   const auto lambda = _mult->multipliers();
@@ -188,14 +189,14 @@ void CoupledSolver::start(std::span<const double> u_fe, std::span<const double> 
   _multiplier_energy = 0.0;
 }
 
-double CoupledSolver::step(bool full_step_velocities)
+double CoupledSolver::step(bool observed)
 {
   const double t0 = now_s();
   _fe_solver->begin_step();
   const double t1 = now_s();
   _de_solver->begin_step();
   const double t2 = now_s();
-  correct(true);
+  correct(true, observed);
   const double t3 = now_s();
   _fe_solver->end_step();
   const double t4 = now_s();
@@ -206,8 +207,8 @@ double CoupledSolver::step(bool full_step_velocities)
   // projected anyway), but v(n+1) -- written out, and in the kinetic
   // energy -- then satisfies the constraint instead of carrying the
   // unconstrained dt/2 a of the lightest (floored) masses.
-  if (full_step_velocities || _fe_solver->damping() > 0.0 || _de_solver->damping() > 0.0)
-    correct(false);
+  if (observed || _fe_solver->damping() > 0.0 || _de_solver->damping() > 0.0)
+    correct(false, false);
   const double t6 = now_s();
   _time.fe += (t1 - t0) + (t4 - t3);
   _time.de += (t2 - t1) + (t5 - t4);

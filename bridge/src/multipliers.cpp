@@ -24,11 +24,13 @@ struct MultiplierSolver::Factor
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
   std::vector<std::int32_t> dofs;  // compact dof -> FE dof
   std::vector<std::int32_t> node;  // (points, npc): compact node of each entry of G
+  std::vector<double> normal;      // (compact nodes, 3): the node's n_bar (shells)
   // G^T as a gather: the entries q = p npc + k of compact node c are
-  // entry[first[c] .. first[c + 1]), so G^T f is computed node by node,
-  // in parallel, with no write conflict
-  std::vector<std::int32_t> first, entry;
+  // entry[first[c] .. first[c + 1]), point[e] = q / npc, so G^T f is
+  // computed node by node, in parallel, with no write conflict
+  std::vector<std::int32_t> first, entry, point;
   std::vector<double> vc;          // compact FE velocities
+  std::vector<double> terms;       // (compact nodes, 6): v_J and omega_J x n_J
   Eigen::VectorXd z, s;
 };
 
@@ -102,6 +104,23 @@ MultiplierSolver::MultiplierSolver(const CouplingOperator& op, std::span<const d
     for (std::size_t q = 0; q < np * npc; ++q)
       F.entry[fill[F.node[q]]++] = static_cast<std::int32_t>(q);
   }
+  F.point.resize(F.entry.size());
+  for (std::size_t e = 0; e < F.entry.size(); ++e)
+    F.point[e] = F.entry[e] / npc;
+  // each node's normal, stored by the operator once per entry
+  F.normal.assign(3 * k, 0.0);
+  if (bs == 6)
+    for (std::int32_t c = 0; c < k; ++c)
+      for (std::int32_t e = F.first[c]; e < F.first[c + 1]; ++e)
+        for (int i = 0; i < 3; ++i)
+        {
+          const double n = op.normals()[3 * F.entry[e] + i];
+          if (e > F.first[c] && n != F.normal[3 * c + i])
+            throw std::logic_error("multipliers: shell node " + std::to_string(F.dofs[bs * c] / bs)
+                                   + " has two normals in the coupling operator");
+          F.normal[3 * c + i] = n;
+        }
+  F.terms.assign(6 * k, 0.0);
   std::vector<Eigen::Triplet<double>> trip;
   for (std::int32_t i = 0; i < ns; ++i)
     trip.emplace_back(i, i, m_fe[F.dofs[i]]);
@@ -157,72 +176,86 @@ std::vector<double> MultiplierSolver::residual(std::span<const double> v_de,
 
 namespace
 {
-/// Threads for a pass over n points or nodes: a pass costs ~20 ns per point,
-/// so below a few hundred the team's start costs more than it saves.
-int threads_for(std::size_t n) { return n >= 256 ? omp_get_max_threads() : 1; }
-} // namespace
+/// Threads for a pass over n points: a pass costs ~10 ns per point, and a
+/// team's start ~4 us on the 2-core machine (measured: the bar's 1,211
+/// points took 0.45 s of multipliers on two threads, 0.40 s on one), so
+/// below a few thousand points one thread is faster.
+int threads_for(std::size_t n) { return n >= 4096 ? omp_get_max_threads() : 1; }
 
-void MultiplierSolver::apply(std::span<const double> uc, std::span<double> v) const
+/// v_J and b-free part omega_J x n_J of each compact node (shells), or v_J
+/// and zero (solids): G then reads v_p = sum_k a_pk t_J(p,k)[0..2] +
+/// b_pk t_J(p,k)[3..5], 6 multiply-adds per entry.
+void node_terms(std::span<const double> uc, int bs, const std::vector<double>& normal,
+                std::vector<double>& t)
 {
-  const auto& F = *_factor;
-  const std::size_t np = _op.size();
-  const int npc = _op.nodes_per_cell(), bs = _op.block_size();
-  const double* a = _op.a().data();
-  const double* b = _op.b().data();
-  const double* nrm = _op.normals().data();
-#pragma omp parallel for schedule(static) num_threads(threads_for(np))
-  for (std::size_t p = 0; p < np; ++p)
+  const std::size_t nn = t.size() / 6;
+  for (std::size_t c = 0; c < nn; ++c)
   {
-    double out[3] = {0.0, 0.0, 0.0};
-    for (int k = 0; k < npc; ++k)
+    const double* u = &uc[bs * c];
+    double* o = &t[6 * c];
+    o[0] = u[0];
+    o[1] = u[1];
+    o[2] = u[2];
+    if (bs == 6)
     {
-      const std::size_t q = p * npc + k;
-      const double* u = &uc[bs * F.node[q]];
-      for (int i = 0; i < 3; ++i)
-        out[i] += a[q] * u[i];
-      if (bs == 6)
-      {
-        // b (omega x n)
-        const double* w = u + 3;
-        const double* n = nrm + 3 * q;
-        out[0] += b[q] * (w[1] * n[2] - w[2] * n[1]);
-        out[1] += b[q] * (w[2] * n[0] - w[0] * n[2]);
-        out[2] += b[q] * (w[0] * n[1] - w[1] * n[0]);
-      }
+      const double* w = u + 3;
+      const double* n = &normal[3 * c];
+      o[3] = w[1] * n[2] - w[2] * n[1];
+      o[4] = w[2] * n[0] - w[0] * n[2];
+      o[5] = w[0] * n[1] - w[1] * n[0];
     }
-    for (int i = 0; i < 3; ++i)
-      v[3 * p + i] = out[i];
+    else
+      o[3] = o[4] = o[5] = 0.0;
   }
 }
+
+/// G_p u from the node terms, (3).
+inline void row(const double* a, const double* b, const std::int32_t* node, int npc,
+                const double* t, double out[3])
+{
+  out[0] = out[1] = out[2] = 0.0;
+  for (int k = 0; k < npc; ++k)
+  {
+    const double* tk = t + 6 * node[k];
+    for (int i = 0; i < 3; ++i)
+      out[i] += a[k] * tk[i] + b[k] * tk[3 + i];
+  }
+}
+} // namespace
 
 void MultiplierSolver::apply_transpose(std::span<const double> f, std::span<double> zc) const
 {
   const auto& F = *_factor;
   const std::size_t nn = F.first.size() - 1;
-  const int npc = _op.nodes_per_cell(), bs = _op.block_size();
+  const int bs = _op.block_size();
   const double* a = _op.a().data();
   const double* b = _op.b().data();
-  const double* nrm = _op.normals().data();
-#pragma omp parallel for schedule(static) num_threads(threads_for(F.entry.size() / npc))
+#pragma omp parallel for schedule(static) num_threads(threads_for(F.entry.size() / _op.nodes_per_cell()))
   for (std::size_t c = 0; c < nn; ++c)
   {
-    double out[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    // sum a f over the node's entries, and sum b f, whose moment is n x (sum b f)
+    double fa[3] = {0.0, 0.0, 0.0}, fb[3] = {0.0, 0.0, 0.0};
     for (std::int32_t e = F.first[c]; e < F.first[c + 1]; ++e)
     {
       const std::int32_t q = F.entry[e];
-      const double* fp = &f[3 * (q / npc)];
+      const double* fp = &f[3 * F.point[e]];
       for (int i = 0; i < 3; ++i)
-        out[i] += a[q] * fp[i];
-      if (bs != 6)
-        continue;
-      // <b (w x n), f> = <w, b (n x f)>: the moment is b n x f
-      const double* n = nrm + 3 * q;
-      out[3] += b[q] * (n[1] * fp[2] - n[2] * fp[1]);
-      out[4] += b[q] * (n[2] * fp[0] - n[0] * fp[2]);
-      out[5] += b[q] * (n[0] * fp[1] - n[1] * fp[0]);
+      {
+        fa[i] += a[q] * fp[i];
+        fb[i] += b[q] * fp[i];
+      }
     }
-    for (int d = 0; d < bs; ++d)
-      zc[bs * c + d] = out[d];
+    double* z = &zc[bs * c];
+    z[0] = fa[0];
+    z[1] = fa[1];
+    z[2] = fa[2];
+    if (bs == 6)
+    {
+      const double* n = &F.normal[3 * c];
+      z[3] = n[1] * fb[2] - n[2] * fb[1];
+      z[4] = n[2] * fb[0] - n[0] * fb[2];
+      z[5] = n[0] * fb[1] - n[1] * fb[0];
+    }
   }
 }
 
@@ -232,19 +265,30 @@ double MultiplierSolver::correct(std::span<double> v_de, std::span<double> v_fe,
   // Woodbury form of the correction is v_fe += s, v_de -= r - G s, and
   // lambda = D^-1 (r - G s) / dt: one pass of G^T and two of G over the
   // points (a third for the residual), all in the compact numbering of the
-  // FE dofs the overlap touches.
+  // FE dofs the overlap touches. G's passes are fused with the point loops.
   auto& F = *_factor;
   const std::size_t np = _op.size();
   const std::size_t ns = F.dofs.size();
+  const int npc = _op.nodes_per_cell(), bs = _op.block_size();
+  const double* a = _op.a().data();
+  const double* b = _op.b().data();
+  const std::int32_t* node = F.node.data();
+  const double* t = F.terms.data();
+  const int nt = threads_for(np);
   for (std::size_t i = 0; i < ns; ++i)
     F.vc[i] = v_fe[F.dofs[i]];
-  apply(F.vc, _tmp);
+  node_terms(F.vc, bs, F.normal, F.terms);
+#pragma omp parallel for schedule(static) num_threads(nt)
   for (std::size_t p = 0; p < np; ++p)
+  {
+    double g[3];
+    row(a + npc * p, b + npc * p, node + npc * p, npc, t, g);
     for (int i = 0; i < 3; ++i)
     {
-      _rhs[3 * p + i] = v_de[3 * p + i] - _tmp[3 * p + i];
+      _rhs[3 * p + i] = v_de[3 * p + i] - g[i];
       _tmp[3 * p + i] = _m_de[p] * _rhs[3 * p + i];
     }
+  }
   apply_transpose(_tmp, {F.z.data(), ns});
   F.s = F.ldlt.solve(F.z);
   for (std::size_t i = 0; i < ns; ++i)
@@ -252,21 +296,32 @@ double MultiplierSolver::correct(std::span<double> v_de, std::span<double> v_fe,
     F.vc[i] += F.s[i];
     v_fe[F.dofs[i]] = F.vc[i];
   }
-  apply({F.s.data(), ns}, _tmp);
+  node_terms({F.s.data(), ns}, bs, F.normal, F.terms);
+  const double idt = 1.0 / _dt;
+#pragma omp parallel for schedule(static) num_threads(nt)
   for (std::size_t p = 0; p < np; ++p)
+  {
+    double g[3];
+    row(a + npc * p, b + npc * p, node + npc * p, npc, t, g);
     for (int i = 0; i < 3; ++i)
     {
-      const double d = _rhs[3 * p + i] - _tmp[3 * p + i];
-      _lambda[3 * p + i] = _m_de[p] * d / _dt;
+      const double d = _rhs[3 * p + i] - g[i];
+      _lambda[3 * p + i] = _m_de[p] * d * idt;
       v_de[3 * p + i] -= d;
     }
+  }
   if (!residual)
     return std::numeric_limits<double>::quiet_NaN();
-  // residual after the correction, in the scratch buffer (no allocation per step)
-  apply(F.vc, _tmp);
+  // residual after the correction (no allocation per step)
+  node_terms(F.vc, bs, F.normal, F.terms);
   double worst = 0.0;
-  for (std::size_t i = 0; i < 3 * np; ++i)
-    worst = std::max(worst, std::abs(v_de[i] - _tmp[i]));
+  for (std::size_t p = 0; p < np; ++p)
+  {
+    double g[3];
+    row(a + npc * p, b + npc * p, node + npc * p, npc, t, g);
+    for (int i = 0; i < 3; ++i)
+      worst = std::max(worst, std::abs(v_de[3 * p + i] - g[i]));
+  }
   return worst;
 }
 

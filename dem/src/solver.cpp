@@ -32,18 +32,13 @@ ContactFactors contact_factors(const Material& m)
   return {k.kn / m.youngs_modulus, k.ks / k.kn};
 }
 
-/// Thread t's spheres: [lo, hi).
-inline void thread_range(std::size_t np, int t, int nt, std::size_t& lo, std::size_t& hi)
-{
-  lo = np * static_cast<std::size_t>(t) / static_cast<std::size_t>(nt);
-  hi = np * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(nt);
-}
-
 /// One sweep over the items of `ix` by the calling thread (call from every
 /// thread of the team; see SweepIndex). compute(i, k, out) writes item k's
 /// force on b and torque factor into out[6] and returns false if the item
 /// acts no more (out zeroed). f and q receive the sums for this thread's
-/// spheres; `reset` zeroes them first.
+/// spheres, ix.bounds[t] to ix.bounds[t + 1]; `reset` zeroes them first.
+/// The sums are the same bit for bit whatever the thread count: into each
+/// sphere, the items of lower spheres in item order, then its own.
 /// Values per item that a sweep prepares for a whole sphere at once.
 constexpr int prepared = 8;
 /// Doubles per sphere record of the force loop: centre (3), radius, the
@@ -92,24 +87,33 @@ inline void branches(const double* rec, std::size_t i, std::span<const std::int3
 /// prepare(i, k0, k1, g) fills the `prepared` values of the items of sphere
 /// i (reading state only); compute(i, k, g_k, out) then does item k.
 template <typename Prepare, typename Compute>
-void sweep(SweepIndex& ix, std::span<const std::int32_t> b, std::size_t np, bool reset,
+void sweep(SweepIndex& ix, std::span<const std::int32_t> b, bool reset,
            double* f, double* q, Prepare&& prepare, Compute&& compute)
 {
   const int t = omp_get_thread_num();
-  std::size_t lo, hi;
-  thread_range(np, t, ix.threads, lo, hi);
+  const std::size_t lo = ix.bounds[t], hi = ix.bounds[t + 1];
   const std::int32_t bhi = static_cast<std::int32_t>(hi);
   std::vector<double>& g = ix.geometry[t];
-  std::int32_t slot = ix.cross_first[t];
-  for (std::size_t i = lo; i < hi; ++i)
+  // a sphere's cross items are the tail of its items (b sorted within i);
+  // the team shares all of them out evenly (any thread may compute an item:
+  // its output goes to its slot), so that no thread waits for another's
+  // at the barrier, then each thread sums its spheres' own items
+  auto cross_begin = [&](std::int32_t k0, std::int32_t k1)
   {
-    const std::int32_t k0 = ix.first[i], k1 = ix.first[i + 1];
-    if (k1 == k0 || b[k1 - 1] < bhi) // no cross item (b sorted within i)
-      continue;
-    prepare(i, k0, k1, g.data());
-    for (std::int32_t k = k0; k < k1; ++k)
-      if (b[k] >= bhi)
-        compute(i, k, &g[prepared * (k - k0)], &ix.out[6 * slot++]);
+    while (k1 > k0 && b[k1 - 1] >= bhi)
+      --k1;
+    return k1;
+  };
+  {
+    const std::size_t nc = ix.cross_i.size(), nt = static_cast<std::size_t>(ix.threads);
+    const std::size_t c0 = nc * static_cast<std::size_t>(t) / nt,
+                      c1 = nc * static_cast<std::size_t>(t + 1) / nt;
+    for (std::size_t c = c0; c < c1; ++c)
+    {
+      const std::int32_t i = ix.cross_i[c], k = ix.cross_k[c];
+      prepare(static_cast<std::size_t>(i), k, k + 1, g.data());
+      compute(static_cast<std::size_t>(i), k, g.data(), &ix.out[6 * c]);
+    }
   }
   if (reset)
   {
@@ -128,14 +132,16 @@ void sweep(SweepIndex& ix, std::span<const std::int32_t> b, std::size_t np, bool
         q[3 * j + c] += o[3 + c];
       }
     }
-  slot = ix.cross_first[t];
+  std::int32_t slot = ix.cross_first[t];
   for (std::size_t i = lo; i < hi; ++i)
   {
     double fi[3] = {0.0, 0.0, 0.0}, qi[3] = {0.0, 0.0, 0.0};
     const std::int32_t k0 = ix.first[i], k1 = ix.first[i + 1];
     if (k0 == k1)
       continue;
-    prepare(i, k0, k1, g.data());
+    const std::int32_t kc = cross_begin(k0, k1);
+    if (kc > k0)
+      prepare(i, k0, kc, g.data());
     for (std::int32_t k = k0; k < k1; ++k)
     {
       const std::int32_t j = b[k];
@@ -196,21 +202,43 @@ void SweepIndex::build(std::size_t np, std::span<const std::int32_t> a,
 {
   first = impl::first_by_a(np, a, b, "force loop: links and pairs");
   threads = nt;
+  // thread t sweeps spheres [bounds[t], bounds[t + 1]): equal shares of
+  // items + spheres (a sphere's own cost, reset and sums, ~ one item),
+  // not of spheres -- where the sphere order makes the early spheres own
+  // more items (a Morton curve over a box whose sides are not in powers of
+  // 2) a split by spheres left one thread 24 % more items (coupled bar)
+  bounds.assign(nt + 1, np);
+  bounds[0] = 0;
+  {
+    const double total = static_cast<double>(first[np]) + static_cast<double>(np);
+    std::size_t i = 0;
+    for (int t = 1; t < nt; ++t)
+    {
+      const double share = total * t / nt;
+      while (i < np && static_cast<double>(first[i]) + static_cast<double>(i) < share)
+        ++i;
+      bounds[t] = i;
+    }
+  }
   cross_first.assign(nt + 1, 0);
   in_first.assign(np + 1, 0);
+  cross_i.clear();
+  cross_k.clear();
   std::vector<std::int32_t> target;
   for (int t = 0; t < nt; ++t)
   {
-    std::size_t lo, hi;
-    thread_range(np, t, nt, lo, hi);
+    const std::size_t lo = bounds[t], hi = bounds[t + 1];
     cross_first[t + 1] = cross_first[t];
-    for (std::int32_t k = first[lo]; k < first[hi]; ++k)
-      if (static_cast<std::size_t>(b[k]) >= hi)
-      {
-        ++cross_first[t + 1];
-        ++in_first[b[k] + 1];
-        target.push_back(b[k]);
-      }
+    for (std::size_t i = lo; i < hi; ++i)
+      for (std::int32_t k = first[i]; k < first[i + 1]; ++k)
+        if (static_cast<std::size_t>(b[k]) >= hi)
+        {
+          ++cross_first[t + 1];
+          ++in_first[b[k] + 1];
+          target.push_back(b[k]);
+          cross_i.push_back(static_cast<std::int32_t>(i));
+          cross_k.push_back(k);
+        }
   }
   for (std::size_t i = 0; i < np; ++i)
     in_first[i + 1] += in_first[i];
@@ -230,9 +258,10 @@ std::size_t min_spheres_per_thread_team() { return impl::min_items_per_team(); }
 
 std::size_t SweepIndex::bytes() const
 {
-  std::size_t s = (first.capacity() + cross_first.capacity() + in_first.capacity() + in.capacity())
+  std::size_t s = (first.capacity() + cross_first.capacity() + in_first.capacity() + in.capacity()
+                   + cross_i.capacity() + cross_k.capacity())
              * sizeof(std::int32_t)
-         + out.capacity() * sizeof(double);
+         + out.capacity() * sizeof(double) + bounds.capacity() * sizeof(std::size_t);
   for (const auto& g : geometry)
     s += g.capacity() * sizeof(double);
   return s;
@@ -405,7 +434,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
         r[6] = q.u[2];
         r[7] = q.k;
       }
-      sweep(s.links, l.b, np, true, f, t, link_prepare, link_force);
+      sweep(s.links, l.b, true, f, t, link_prepare, link_force);
     }
   }
   if (short_team)
@@ -487,14 +516,14 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   {
     if (omp_get_num_threads() == nt)
     {
-      sweep(s.pairs, nl.b, np, false, f, t,
+      sweep(s.pairs, nl.b, false, f, t,
             [&](std::size_t i, std::int32_t k0, std::int32_t k1, double* g)
             { branches(rec, i, nl.b, k0, k1, g); },
             contact_force);
       // torques: each sphere's radius times its summed torque factors
-      std::size_t lo, hi;
-      thread_range(np, omp_get_thread_num(), nt, lo, hi);
-      for (std::size_t i = lo; i < hi; ++i)
+      // (the spheres whose sums this thread's sweep completed)
+      const int th = omp_get_thread_num();
+      for (std::size_t i = s.pairs.bounds[th]; i < s.pairs.bounds[th + 1]; ++i)
         for (int k = 0; k < 3; ++k)
           t[3 * i + k] *= rad[i];
     }

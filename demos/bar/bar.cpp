@@ -410,7 +410,7 @@ nlohmann::json run_bar(const BarConfig& c)
   for (std::int64_t k = 1; k <= nsteps; ++k)
   {
     if (coupled)
-      coupled->step(k % every == 0 || k == nsteps); // v(n+1) is read where frames are written
+      coupled->step(k % every == 0 || k == nsteps); // observed where frames are written
     else if (fes)
     {
       const double s0 = clock.seconds();

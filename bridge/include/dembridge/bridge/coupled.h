@@ -86,15 +86,18 @@ public:
   /// made compatible by one correction, then both sides start.
   void start(std::span<const double> u_fe, std::span<const double> v_fe);
   /// One coupled step; returns the constraint residual after the correction [m/s].
-  /// `full_step_velocities`: project v(n+1) onto the constraint too (a
-  /// second multiplier solve); false when no velocity is read after this
-  /// step (no output frame, no energy). Without damping the positions do
-  /// not depend on it -- the next half-step velocities are projected anyway,
-  /// and the projection is linear -- so it is then skipped (tested: the
-  /// same motion to 1e-12). With damping on either side it is always made:
-  /// it changes the path there (the shell damps with v(n+1/2), the spheres
-  /// with v(n+1)).
-  double step(bool full_step_velocities = true);
+  /// `observed`: the caller reads this step's state (an output frame, the
+  /// energy, the residual). When false, what only an observer needs is
+  /// skipped:
+  ///  - the projection of v(n+1) onto the constraint (a second multiplier
+  ///    solve). Without damping the positions do not depend on it -- the
+  ///    next half-step velocities are projected anyway, and the projection
+  ///    is linear -- so it is then skipped (tested: the same motion to
+  ///    1e-12). With damping on either side it is always made: it changes
+  ///    the path there (the shell damps with v(n+1/2), the spheres with v(n+1)).
+  ///  - the residual's pass over the points: the return value is then the
+  ///    residual of the last observed step (0 before any).
+  double step(bool observed = true);
 
   double dt() const { return _dt; }
   /// Critical step of the coupled, weighted system [s]: 2 / sqrt(lambda_max)
@@ -110,7 +113,7 @@ public:
   const CoupledTimings& timings() const { return _time; }
 
 private:
-  void correct(bool half_step);
+  void correct(bool half_step, bool residual = true);
   shell::FEModel& _model;
   dem::Particles& _p;
   std::vector<std::int32_t> _ids;  // constrained particles

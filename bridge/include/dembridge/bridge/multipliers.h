@@ -45,9 +45,7 @@ public:
   std::vector<double> residual(std::span<const double> v_de, std::span<const double> v_fe) const;
 
 private:
-  /// v (points, 3) = G uc, uc over the compact FE dofs; apply_transpose:
-  /// zc = G^T f over the compact dofs (overwritten).
-  void apply(std::span<const double> uc, std::span<double> v) const;
+  /// zc = G^T f over the compact FE dofs (overwritten).
   void apply_transpose(std::span<const double> f, std::span<double> zc) const;
   struct Factor;
   const CouplingOperator& _op;

@@ -46,8 +46,10 @@ struct ForceCounters
 struct SweepIndex
 {
   std::vector<std::int32_t> first;      ///< items with a = i: [first[i], first[i + 1])
+  std::vector<std::size_t> bounds;      ///< spheres of thread t: [bounds[t], bounds[t + 1]) (T + 1)
   std::vector<std::int32_t> cross_first; ///< first buffer slot of each thread (T + 1)
   std::vector<std::int32_t> in_first, in; ///< slots of the cross items into sphere b (CSR)
+  std::vector<std::int32_t> cross_i, cross_k; ///< per slot: the cross item's sphere a and item
   std::vector<double> out;              ///< per cross item: force on b (3), torque factor q (3)
   std::vector<std::vector<double>> geometry; ///< per thread: branches of one sphere's items
   int threads = 0;
