@@ -115,3 +115,41 @@ TEST_CASE("bar, reduced: without the skin compensation the DE bar is soft in ben
   CHECK(err < 1.5 * est);
   CHECK(r.at("skin_compensation").at("on").get<bool>() == false);
 }
+
+TEST_CASE("bar --seeds: the scatter table from the per-seed tables", "[bar]")
+{
+  // three synthetic per-seed tables with known values: the means, sample
+  // standard deviations and between counts are exact arithmetic
+  auto table = [](double fe, double coupled, double de, double static_err)
+  {
+    nlohmann::json t;
+    for (const std::string load : {"tension", "bending"})
+    {
+      for (const std::string probe : {"probe_0_75", "probe_0_4351"})
+        for (const std::string q : {"first_frequency_hz", "amplitude_m"})
+          t[load][probe][q] = {{"fe", fe}, {"coupled", coupled}, {"de", de},
+                               {"coupled_vs_de", coupled / de - 1.0}, {"coupled_vs_fe", coupled / fe - 1.0},
+                               {"between", (coupled - fe) * (coupled - de) <= 0.0}};
+      for (const std::string model : {"fe", "coupled", "de"})
+        t["static"][load][model] = {{"relative_error", static_err}};
+    }
+    return t;
+  };
+  // coupled between in the first two, above both in the third
+  const std::vector<nlohmann::json> tables{table(100.0, 101.0, 102.0, -0.01), table(100.0, 101.0, 104.0, 0.0),
+                                           table(100.0, 101.0, 100.0, 0.01)};
+  std::string md;
+  const auto s = demo::seeds_table({1, 2, 3}, tables, md);
+  const auto& f = s.at("bending").at("probe_0_75").at("first_frequency_hz");
+  CHECK(f.at("de").at("mean").get<double>() == Approx(102.0).epsilon(1e-14));
+  CHECK(f.at("de").at("sd").get<double>() == Approx(2.0).epsilon(1e-14)); // sqrt((0 + 4 + 4) / 2)
+  CHECK(f.at("coupled").at("sd").get<double>() == 0.0);
+  CHECK(f.at("between").get<int>() == 2);
+  CHECK(f.at("coupled_vs_de").size() == 3);
+  CHECK(f.at("coupled_vs_de")[2].get<double>() == Approx(0.01).epsilon(1e-12));
+  CHECK(s.at("static").at("tension").at("de").at("mean").get<double>() == Approx(0.0).margin(1e-15));
+  CHECK(s.at("static").at("tension").at("de").at("sd").get<double>() == Approx(0.01).epsilon(1e-12));
+  CHECK(md.find("| bending | first frequency | probe_0_75 |") != std::string::npos);
+  CHECK(md.find("2 of 3") != std::string::npos);
+  CHECK_THROWS_WITH(demo::seeds_table({1}, {tables[0]}, md), Catch::Contains("at least two seeds"));
+}

@@ -628,4 +628,117 @@ nlohmann::json compare_table(const nlohmann::json& runs, std::string& md)
   return table;
 }
 
+nlohmann::json compare_cases(const BarConfig& c, const std::filesystem::path& root)
+{
+  nlohmann::json runs;
+  for (const std::string regime : {"static", "dynamic"})
+    for (const std::string load : {"tension", "bending"})
+      for (const std::string model : {"fe", "coupled", "de"})
+      {
+        BarConfig k = c;
+        k.model = model;
+        k.load = load;
+        k.regime = regime;
+        const std::string key = model + "_" + load + "_" + regime;
+        k.output = (root / key).string();
+        std::cout << "# case " << key << " (seed " << c.seed << ")" << std::endl;
+        runs[key] = run_bar(k);
+        write_json(root / key / "summary.json", runs[key]);
+      }
+  std::string md;
+  const auto table = compare_table(runs, md);
+  std::cout << "\n" << md << std::endl;
+  std::ofstream(root / "comparison.md") << md;
+  nlohmann::json all = {{"table", table}, {"runs", runs}};
+  write_json(root / "comparison.json", all);
+  return all;
+}
+
+nlohmann::json seeds_table(const std::vector<unsigned>& seeds, const std::vector<nlohmann::json>& tables,
+                           std::string& markdown)
+{
+  if (seeds.size() < 2 || tables.size() != seeds.size())
+    throw std::runtime_error("seeds table: " + std::to_string(seeds.size()) + " seeds and "
+                             + std::to_string(tables.size()) + " tables: needs at least two seeds, one table each");
+  const double n = static_cast<double>(seeds.size());
+  auto mean_sd = [n](const std::vector<double>& v)
+  {
+    const double m = std::accumulate(v.begin(), v.end(), 0.0) / n;
+    double ss = 0.0;
+    for (double x : v)
+      ss += (x - m) * (x - m);
+    return std::pair<double, double>{m, std::sqrt(ss / (n - 1.0))};
+  };
+  auto percents = [](const std::vector<double>& v)
+  {
+    std::string out;
+    char b[32];
+    for (std::size_t i = 0; i < v.size(); ++i)
+    {
+      std::snprintf(b, sizeof b, "%s%+.2f", i ? ", " : "", 100.0 * v[i]);
+      out += b;
+    }
+    return out + " %";
+  };
+  nlohmann::json out;
+  out["seeds"] = seeds;
+  std::ostringstream m;
+  char buf[512];
+  m << "Seeds:";
+  for (auto sd : seeds)
+    m << " " << sd;
+  m << "\n\n| load | quantity | probe | FE: mean (sd) | coupled: mean (sd) | DE: mean (sd) | coupled vs DE, per seed "
+       "| coupled vs FE, per seed | between |\n|---|---|---|---|---|---|---|---|---|\n";
+  for (const std::string load : {"tension", "bending"})
+    for (const std::string probe : {"probe_0_75", "probe_0_4351"})
+      for (const std::string q : {"first_frequency_hz", "amplitude_m"})
+      {
+        std::map<std::string, std::vector<double>> v;
+        int between = 0;
+        for (const auto& t : tables)
+        {
+          const auto& e = t.at(load).at(probe).at(q);
+          for (const std::string model : {"fe", "coupled", "de"})
+            v[model].push_back(e.at(model).get<double>());
+          v["coupled_vs_de"].push_back(e.at("coupled_vs_de").get<double>());
+          v["coupled_vs_fe"].push_back(e.at("coupled_vs_fe").get<double>());
+          between += e.at("between").get<bool>() ? 1 : 0;
+        }
+        auto& o = out[load][probe][q];
+        std::string cells[3];
+        int col = 0;
+        for (const std::string model : {"fe", "coupled", "de"})
+        {
+          const auto [mu, sd] = mean_sd(v[model]);
+          o[model] = {{"values", v[model]}, {"mean", mu}, {"sd", sd}, {"relative_sd", sd / std::abs(mu)}};
+          std::snprintf(buf, sizeof buf, q == "amplitude_m" ? "%.4e (%.2f %%)" : "%.2f (%.2f %%)", mu,
+                        100.0 * sd / std::abs(mu));
+          cells[col++] = buf;
+        }
+        o["coupled_vs_de"] = v["coupled_vs_de"];
+        o["coupled_vs_fe"] = v["coupled_vs_fe"];
+        o["between"] = between;
+        std::snprintf(buf, sizeof buf, "| %s | %s | %s | %s | %s | %s | %s | %s | %d of %zu |\n", load.c_str(),
+                      q == "amplitude_m" ? "amplitude" : "first frequency", probe.c_str(), cells[0].c_str(),
+                      cells[1].c_str(), cells[2].c_str(), percents(v["coupled_vs_de"]).c_str(),
+                      percents(v["coupled_vs_fe"]).c_str(), between, seeds.size());
+        m << buf;
+      }
+  m << "\n| load | model | static error against beam theory, per seed | mean (sd) |\n|---|---|---|---|\n";
+  for (const std::string load : {"tension", "bending"})
+    for (const std::string model : {"fe", "coupled", "de"})
+    {
+      std::vector<double> e;
+      for (const auto& t : tables)
+        e.push_back(t.at("static").at(load).at(model).at("relative_error").get<double>());
+      const auto [mu, sd] = mean_sd(e);
+      out["static"][load][model] = {{"relative_error", e}, {"mean", mu}, {"sd", sd}};
+      std::snprintf(buf, sizeof buf, "| %s | %s | %s | %+.2f %% (%.2f %%) |\n", load.c_str(), model.c_str(),
+                    percents(e).c_str(), 100.0 * mu, 100.0 * sd);
+      m << buf;
+    }
+  markdown = m.str();
+  return out;
+}
+
 } // namespace dembridge::demo

@@ -20,6 +20,7 @@
 /// The bar is linear elastic (the paper validates the coupling in
 /// elasticity): the DE links' strengths are raised out of reach.
 
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -87,5 +88,21 @@ double bar_first_frequency(const BarConfig& c, double E, double nu, double rho);
 /// probes, static errors against beam theory, wall times. Returns the table
 /// as JSON; `markdown` receives it as a Markdown table.
 nlohmann::json compare_table(const nlohmann::json& runs, std::string& markdown);
+
+/// The twelve cases with c's sizes, seed and E (c.model, load, regime and
+/// output are not read), each written to root/<model>_<load>_<regime>
+/// (history, shapes, XDMF, summary.json), then root/comparison.md and
+/// root/comparison.json. Returns {"table": compare_table, "runs": summaries}.
+nlohmann::json compare_cases(const BarConfig& c, const std::filesystem::path& root);
+
+/// Several packings (`--seeds`): for each quantity of the paper's table,
+/// each model's mean and sample standard deviation over the seeds, coupled
+/// vs DE and vs FE for each seed, and in how many seeds the coupled value
+/// lies between the FE and DE ones; for the statics, each model's error
+/// against beam theory per seed. `tables[k]` is compare_table's JSON for
+/// `seeds[k]`. Returns it as JSON; `markdown` receives the Markdown tables.
+/// @throws std::runtime_error with fewer than two seeds.
+nlohmann::json seeds_table(const std::vector<unsigned>& seeds, const std::vector<nlohmann::json>& tables,
+                           std::string& markdown);
 
 } // namespace dembridge::demo

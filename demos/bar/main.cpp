@@ -10,6 +10,7 @@
 //   build/bin/bar --model coupled --load tension --regime dynamic --output out/bar
 //   build/bin/bar --model de --load bending --regime static --summary out/bar.json
 //   build/bin/bar --compare --output out/bar_compare --summary out/bar_compare.json
+//   build/bin/bar --compare --seeds 5 --output out/bar_seeds
 #include "bar.h"
 #include "support.h"
 
@@ -17,6 +18,8 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <stdexcept>
+#include <vector>
 
 int main(int argc, char** argv)
 {
@@ -24,12 +27,14 @@ int main(int argc, char** argv)
   demo::BarConfig c;
   c.material = DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json";
   bool compare = false;
+  int seeds = 1;
   std::string summary, python = "/usr/bin/python3";
   CLI::App app{"The paper's validation bar: FE, coupled and DE models, tension and bending, static and dynamic", "bar"};
   app.add_option("--model", c.model, "fe | coupled | de")->capture_default_str();
   app.add_option("--load", c.load, "tension | bending")->capture_default_str();
   app.add_option("--regime", c.regime, "static | dynamic")->capture_default_str();
   app.add_flag("--compare", compare, "run all twelve cases (3 models x 2 loads x 2 regimes) and write the paper's table");
+  app.add_option("--seeds", seeds, "with --compare: the twelve cases on this many packings (seed, seed + 1, ...), each in <output>/seed_<s>, and the models' scatter over them in seeds.md / seeds.json")->capture_default_str();
   app.add_option("--length", c.length, "bar length [m]")->capture_default_str();
   app.add_option("--width", c.width, "side of the square section = shell thickness [m]")->capture_default_str();
   app.add_option("--fe-size", c.fe_size, "shell element size [m] (divides the FE region and the width)")->capture_default_str();
@@ -61,48 +66,62 @@ int main(int argc, char** argv)
   {
     demo::echo_options(app);
     demo::check_config(c);
-    if (c.fe_youngs_modulus == 0.0)
+    if (seeds < 1)
+      throw std::runtime_error("seeds " + std::to_string(seeds) + ": allowed is at least 1");
+    if (seeds > 1 && !compare)
+      throw std::runtime_error("seeds " + std::to_string(seeds) + ": several seeds need --compare");
+    // the E the identified parameters give on a bar's packing (each seed's own)
+    auto with_modulus = [&](demo::BarConfig k)
     {
-      // the E the identified parameters give on this bar's packing
-      c.fe_youngs_modulus = demo::bar_modulus(c);
-      std::cout << "# E measured on the DE bar in static tension: " << c.fe_youngs_modulus
-                << " Pa (FE side and beam theory)" << std::endl;
-    }
+      if (k.fe_youngs_modulus == 0.0)
+      {
+        k.fe_youngs_modulus = demo::bar_modulus(k);
+        std::cout << "# E measured on the DE bar (seed " << k.seed << ") in static tension: " << k.fe_youngs_modulus
+                  << " Pa (FE side and beam theory)" << std::endl;
+      }
+      return k;
+    };
     if (!compare)
     {
-      const auto out = demo::run_bar(c);
+      const auto out = demo::run_bar(with_modulus(c));
       std::cout << out.dump(2) << std::endl;
       if (!summary.empty())
         demo::write_json(summary, out);
       return;
     }
-    // the twelve cases
     const std::filesystem::path root = c.output.empty() ? std::filesystem::path("out/bar_compare") : std::filesystem::path(c.output);
-    nlohmann::json runs;
-    for (const std::string regime : {"static", "dynamic"})
-      for (const std::string load : {"tension", "bending"})
-        for (const std::string model : {"fe", "coupled", "de"})
-        {
-          demo::BarConfig k = c;
-          k.model = model;
-          k.load = load;
-          k.regime = regime;
-          const std::string key = model + "_" + load + "_" + regime;
-          k.output = (root / key).string();
-          std::cout << "# case " << key << std::endl;
-          runs[key] = demo::run_bar(k);
-          demo::write_json(root / key / "summary.json", runs[key]);
-        }
+    auto plot = [&](const std::filesystem::path& dir)
+    {
+      const std::string cmd = python + " " DEMBRIDGE_SOURCE_DIR "/scripts/plot_bar.py " + dir.string();
+      if (std::system(cmd.c_str()) != 0)
+        std::cerr << "warning: the plots were not made (" << cmd << " failed); the table and CSV files are written\n";
+    };
+    if (seeds == 1)
+    {
+      const auto all = demo::compare_cases(with_modulus(c), root);
+      if (!summary.empty())
+        demo::write_json(summary, all);
+      plot(root);
+      return;
+    }
+    // several packings: the twelve cases for each, then their scatter
+    std::vector<unsigned> list;
+    std::vector<nlohmann::json> tables;
+    for (int k = 0; k < seeds; ++k)
+    {
+      demo::BarConfig s = c;
+      s.seed = c.seed + static_cast<unsigned>(k);
+      const auto dir = root / ("seed_" + std::to_string(s.seed));
+      tables.push_back(demo::compare_cases(with_modulus(s), dir).at("table"));
+      list.push_back(s.seed);
+      plot(dir);
+    }
     std::string md;
-    const auto table = demo::compare_table(runs, md);
+    const auto scatter = demo::seeds_table(list, tables, md);
     std::cout << "\n" << md << std::endl;
-    std::ofstream(root / "comparison.md") << md;
-    const nlohmann::json all = {{"table", table}, {"runs", runs}};
-    demo::write_json(root / "comparison.json", all);
+    std::ofstream(root / "seeds.md") << md;
+    demo::write_json(root / "seeds.json", scatter);
     if (!summary.empty())
-      demo::write_json(summary, all);
-    const std::string cmd = python + " " DEMBRIDGE_SOURCE_DIR "/scripts/plot_bar.py " + root.string();
-    if (std::system(cmd.c_str()) != 0)
-      std::cerr << "warning: the plots were not made (" << cmd << " failed); the table and CSV files are written\n";
+      demo::write_json(summary, scatter);
   });
 }
