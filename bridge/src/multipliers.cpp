@@ -177,9 +177,9 @@ std::vector<double> MultiplierSolver::residual(std::span<const double> v_de,
 namespace
 {
 /// Threads for a pass over n points: a pass costs ~10 ns per point, and a
-/// team's start ~4 us on the 2-core machine (measured: the bar's 1,211
-/// points took 0.45 s of multipliers on two threads, 0.40 s on one), so
-/// below a few thousand points one thread is faster.
+/// team's start ~4 us on the 2-core machine; the bar's 1,211 points gained
+/// nothing from a second thread (multipliers 0.44-0.50 s on two, 0.39-0.41 s
+/// on one), so a team only from a few thousand points.
 int threads_for(std::size_t n) { return n >= 4096 ? omp_get_max_threads() : 1; }
 
 /// v_J and b-free part omega_J x n_J of each compact node (shells), or v_J
