@@ -34,7 +34,7 @@ int main(int argc, char** argv)
   app.add_option("--load", c.load, "tension | bending")->capture_default_str();
   app.add_option("--regime", c.regime, "static | dynamic")->capture_default_str();
   app.add_flag("--compare", compare, "run all twelve cases (3 models x 2 loads x 2 regimes) and write the paper's table");
-  app.add_option("--seeds", seeds, "with --compare: the twelve cases on this many packings (seed, seed + 1, ...), each in <output>/seed_<s>, and the models' scatter over them in seeds.md / seeds.json")->capture_default_str();
+  app.add_option("--seeds", seeds, "with --compare: the twelve cases on this many packings (seed, seed + 1, ...), each in <output>/seed_<s> with its own measured E (unless --fe-youngs-modulus is given), and the models' scatter over them in seeds.md / seeds.json")->capture_default_str();
   app.add_option("--length", c.length, "bar length [m]")->capture_default_str();
   app.add_option("--width", c.width, "side of the square section = shell thickness [m]")->capture_default_str();
   app.add_option("--fe-size", c.fe_size, "shell element size [m] (divides the FE region and the width)")->capture_default_str();
