@@ -67,9 +67,13 @@ TEST_CASE("bar, reduced: static shapes against beam theory, dynamic frequencies 
       const double tol = model == "fe" ? 0.02 : 0.02 + (model == "de" ? 2.0 : 1.0) * end_skin;
       CHECK(std::abs(err) < tol);
     }
-    // the paper: the coupled model lies between the FE and DE ones
+    // Not checked: that the coupled error lies between the FE and DE ones
+    // (the paper's claim). Here it is decided by the packing, not by the
+    // coupling: the DE bar's static error scatters between packings by more
+    // than the three models differ (bending at this size: seed 1 FE -0.64 %,
+    // coupled -0.70 %, DE -0.81 %, between; seed 2 -0.64 %, -1.09 %, -0.81 %,
+    // not; full size over five seeds in README, `bar --compare --seeds`).
     INFO(load << ": static error FE " << errs[0] << ", coupled " << errs[1] << ", DE " << errs[2]);
-    CHECK((errs[1] - errs[0]) * (errs[1] - errs[2]) <= 0.0);
     double f[3];
     int k = 0;
     for (const std::string model : {"fe", "coupled", "de"})
@@ -152,4 +156,16 @@ TEST_CASE("bar --seeds: the scatter table from the per-seed tables", "[bar]")
   CHECK(md.find("| bending | first frequency | probe_0_75 |") != std::string::npos);
   CHECK(md.find("2 of 3") != std::string::npos);
   CHECK_THROWS_WITH(demo::seeds_table({1}, {tables[0]}, md), Catch::Contains("at least two seeds"));
+  // many seeds: every per-seed value reaches the Markdown row
+  std::vector<unsigned> many;
+  std::vector<nlohmann::json> many_tables;
+  for (unsigned k = 0; k < 30; ++k)
+  {
+    many.push_back(k + 1);
+    many_tables.push_back(table(100.0, 101.0, k == 29 ? 100.5 : 102.0, 0.0)); // the last: coupled above both
+  }
+  demo::seeds_table(many, many_tables, md);
+  CHECK(md.find("| tension | first frequency | probe_0_75 |") != std::string::npos);
+  CHECK(md.find("+0.50 % | +1.00, ") != std::string::npos); // the 30th seed: 101 / 100.5 - 1, then vs FE
+  CHECK(md.find("29 of 30 |") != std::string::npos);
 }

@@ -695,7 +695,7 @@ void DemSolver::update_held()
 {
   std::fill(_held.begin(), _held.end(), 0);
   for (const auto& m : _motions)
-    if (!m.rotates || m.kind == MotionKind::fixed) // a hinged set moves as a plate
+    if (!m.hinged()) // a hinged set moves as a plate
       for (auto i : m.ids)
         for (int k = 0; k < 6; ++k)
           if (m.kind == MotionKind::fixed || (k < 3 && m.components[k]))
@@ -745,10 +745,9 @@ void DemSolver::add_motion(ParticleMotion m)
         if (std::find(f.ids.begin(), f.ids.end(), i) != f.ids.end())
           throw std::runtime_error("condition '" + m.name + "' holds sphere " + std::to_string(i)
                                    + " of the loading plate '" + f.name + "': a plate's spheres must move freely");
-  const bool hinged = m.rotates && m.kind != MotionKind::fixed;
   for (const auto& o : _motions)
   {
-    if (!hinged && !(o.rotates && o.kind != MotionKind::fixed))
+    if (!m.hinged() && !o.hinged())
       continue;
     for (auto i : m.ids)
       if (std::find(o.ids.begin(), o.ids.end(), i) != o.ids.end())
@@ -804,7 +803,7 @@ void DemSolver::add_force(ParticleForce f)
           throw std::runtime_error("force '" + f.name + "': sphere " + std::to_string(i)
                                    + " of the loading plate is held by a condition; a plate's spheres must move freely");
     for (const auto& o : _motions)
-      if (o.rotates && o.kind != MotionKind::fixed)
+      if (o.hinged())
         for (auto i : f.ids)
           if (std::find(o.ids.begin(), o.ids.end(), i) != o.ids.end())
             throw std::runtime_error("force '" + f.name + "': sphere " + std::to_string(i)
@@ -1035,7 +1034,7 @@ void DemSolver::begin_step()
   tie_plates();
   for (const auto& m : _motions)
   {
-    if (m.rotates && m.kind != MotionKind::fixed)
+    if (m.hinged())
     {
       move_hinged(&m - _motions.data(), _t + 0.5 * dt, t_new, true);
       continue;
@@ -1133,13 +1132,13 @@ void DemSolver::end_step()
   kick(0.5 * dt);
   tie_plates();
   for (const auto& m : _motions)
-    if (m.kind == MotionKind::velocity && !m.rotates)
+    if (m.kind == MotionKind::velocity && !m.hinged())
       for (auto i : m.ids)
         for (int k = 0; k < 3; ++k)
           if (m.components[k])
             _p.v[3 * i + k] = m.value(t_new);
   for (std::size_t q = 0; q < _motions.size(); ++q)
-    if (_motions[q].rotates && _motions[q].kind != MotionKind::fixed)
+    if (_motions[q].hinged())
       move_hinged(q, t_new, t_new, false);
   _t = t_new;
   ++_steps;
@@ -1184,7 +1183,7 @@ std::array<double, 3> DemSolver::reaction(const std::string& name) const
   for (const auto& m : _motions)
     if (m.name == name)
     {
-      if (m.rotates && m.kind != MotionKind::fixed)
+      if (m.hinged())
         return _motion_reac[&m - _motions.data()];
       std::array<double, 3> r{0, 0, 0};
       for (auto i : m.ids)

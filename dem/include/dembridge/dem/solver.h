@@ -144,6 +144,8 @@ struct ParticleMotion
   /// shares no sphere with another condition or a loading plate. Without it
   /// each sphere follows value(t): the set cannot rotate.
   bool rotates = false;
+  /// A hinged set: it rotates and moves (a fixed set holds everything).
+  bool hinged() const { return rotates && kind != MotionKind::fixed; }
 };
 
 /// External force on each particle of a set: direction * value(t) [N].
