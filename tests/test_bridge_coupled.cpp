@@ -298,21 +298,20 @@ TEST_CASE("coupled patch test: a uniform velocity is carried unchanged", "[bridg
   s.start(u, v);
   for (int k = 0; k < 200; ++k)
     s.step();
-  // Everything keeps moving at V up to round-off, the issue's 1e-10 of V.
-  // Three round-off sources made the particles' links strain under a mere
-  // translation (each measured here, 200 steps), all removed:
-  // - x + V dt rounded each sphere's position in its own binade, so the
-  //   branches between spheres jittered. Positions are now multiples of a
-  //   common quantum and move by multiples of it (Particles::quantum), so
-  //   their differences are exact and equal velocities leave them unchanged;
-  // - the trial shear cancelled terms of size K_s D (a link at rest gained
-  //   K_s D eps of shear each step: at V = 0 the errors were as large);
-  // - a link's stored normal differed from the force loop's in the last bit.
-  // Before, in the overlap: 4.0e-11 m/s on the particles, 4.5e-11 m/s on
-  // the shell nodes (1.3e-10 and 1.5e-10 of V), 2.2e-10 m/s elsewhere.
-  // Now 5.3e-14 m/s on every particle and on the shell nodes (1.8e-13 of
-  // V): what is left is the corrections' round-off
-  // (G_FE sums node velocities with weights adding up to 1 within eps).
+  // Everything keeps moving at V up to round-off. Three round-off sources
+  // would make the links strain under a mere translation (each measured
+  // here at 1e-10 of V or more over 200 steps), and the DEM avoids each:
+  // - x + V dt rounded sphere by sphere, each position in its own binade,
+  //   makes the branches between spheres jitter: positions are multiples
+  //   of a common quantum and move by multiples of it (Particles::quantum),
+  //   so their differences are exact and equal velocities leave them as
+  //   they are;
+  // - a trial shear that cancels terms of size K_s D gives a link at rest
+  //   K_s D eps of shear each step: it is evaluated with R - I instead;
+  // - a link's stored normal must have the force loop's bits.
+  // What is left is the corrections' round-off, 5.3e-14 m/s on every
+  // particle and on the shell nodes (1.8e-13 of V): G_FE sums node
+  // velocities with weights adding up to 1 within eps.
   // Bound: the issue's 1e-10 of V, for every particle and node.
   double de = 0.0, fe = 0.0, spin = 0.0;
   for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
@@ -513,7 +512,7 @@ std::pair<double, double> pulse(bool fe_to_de)
   // longitudinal pulse (cosine bell, 8 cm long) starts in the FE-only
   // region. Once it has crossed, the energy left in the FE-only region is
   // the reflected part: below 5 % of the pulse's energy (the issue's bound;
-  // measured 2.5 %). With a 4 cm overlap (7 diameters) it was 9.7 %: the
+  // measured 2.5 %). A 4 cm overlap (7 diameters) reflects 9.7 %: the
   // overlap must span many DE diameters.
   const double w = 0.05, h = 0.05, L = 0.5, xfe = 0.3, xde = 0.22;
   shell::Material sm;
@@ -718,7 +717,7 @@ TEST_CASE("coupled step: skipping the full-step projection leaves the motion unc
   // anyway: skipping would change the path (the two sides damp with
   // different velocities -- the shell's acceleration holds -c v(n+1/2), the
   // spheres' kick -c v(n+1); measured 2e-4 to 9e-4 of the largest after 300
-  // steps at c = 2000 1/s when it did skip). From the first axial mode's
+  // steps at c = 2000 1/s with the projection skipped). From the first axial mode's
   // velocities, 300 steps.
   struct End
   {

@@ -1,4 +1,4 @@
-// The concrete law of the DE model (METHOD.md section 1), pair by pair,
+// The concrete law of the DE model (docs/method.md sections 1.5-1.8), pair by pair,
 // against the closed-form values of the law itself.
 #include "dembridge/dem/law.h"
 
@@ -214,8 +214,8 @@ TEST_CASE("trial shear: a link that neither turns nor spins keeps its force exac
   for (double c : rotation_minus_identity_times(step_rotation({0.0, 0.0, 0.0}), v))
     CHECK(c == 0.0);
   // A stored force and a normal that do not change: trial_shear gives the
-  // force back exactly, whatever the stiffness (the old form, P of
-  // R (fs + K_s D n), left K_s D eps ~ 1e-12 N here from 1 - |n|^2 != 0).
+  // force back exactly, whatever the stiffness (the form P R (fs + K_s D n)
+  // would leave K_s D eps ~ 1e-12 N here, from 1 - |n|^2 != 0).
   Vec3 n{0.3, -0.5, 0.8};
   const double ln = norm(n);
   for (auto& c : n)
@@ -223,8 +223,8 @@ TEST_CASE("trial shear: a link that neither turns nor spins keeps its force exac
   const double ks_d = 4e6 * 2.1e-3;
   const StepRotation none = step_rotation({0.0, 0.0, 0.0});
   const Vec3 zero = trial_shear({0.0, 0.0, 0.0}, n, n, rotation_minus_identity(none), none, 0.4, ks_d);
-  for (double v : zero)
-    CHECK(v == 0.0);
+  for (double z : zero)
+    CHECK(z == 0.0);
   // a tangential force is kept to round-off relative to itself (1e-15 of
   // |fs|), not to K_s D
   Vec3 fs{0.8, 0.0, -0.3}; // fs . n = 0

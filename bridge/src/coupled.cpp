@@ -1,8 +1,7 @@
 #include "dembridge/bridge/coupled.h"
 
-#include <chrono>
-
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -19,25 +18,82 @@ double now_s()
 
 CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& l,
                              const dem::Material& mat, const CouplingOptions& o)
-    : _model(fe), _p(p)
+    : _model(fe), _p(p), _l(l)
+{
+  if (!p.weight.empty() || !l.weight.empty())
+    throw std::runtime_error("these particles or links already carry energy weights: another "
+                             "CoupledSolver holds them (a second one would weight their masses "
+                             "twice); couple a copy, or let the first coupler go first");
+  validate(o);
+  _m_given = p.m;
+  _inertia_given = p.inertia;
+  try
+  {
+    own_critical_steps();
+    weigh_fe(o);
+    weigh_de(o);
+    locate_overlap();
+    coupled_time_step(o);
+    _mult = std::make_unique<MultiplierSolver>(_op, _m_de, _m_fe, _dt);
+    _fe_solver = std::make_unique<shell::ExplicitSolver>(_m_fe, fe.internal_force_fn(), _dt,
+                                                         o.damping_fe);
+    const double rmin = *std::min_element(p.r.begin(), p.r.end());
+    _de_solver = std::make_unique<dem::DemSolver>(p, l, mat, _dt, o.damping_de,
+                                                  o.skin > 0.0 ? o.skin : 0.5 * rmin);
+  }
+  catch (...)
+  {
+    give_back();
+    throw;
+  }
+}
+
+CoupledSolver::~CoupledSolver() { give_back(); }
+
+void CoupledSolver::give_back() noexcept
+{
+  if (_m_given.size() != _p.size())
+    return;
+  _p.m = std::move(_m_given);
+  _p.inertia = std::move(_inertia_given);
+  _m_given.clear();
+  _p.weight.clear();
+  _l.weight.clear();
+  try
+  {
+    _model.set_weight(std::vector<double>(_model.num_nodes(), 1.0));
+  }
+  catch (...)
+  {
+    // only an allocation can fail here; the model keeps the coupling's
+    // weights, which its next coupler or user sets anew
+  }
+}
+
+void CoupledSolver::validate(const CouplingOptions& o)
 {
   o.overlap.validate();
-  const double floor = o.weight_floor;
-  (void)floored(0.5, floor); // validates the floor
+  (void)floored(0.5, o.weight_floor); // validates the floor
   if (!(o.safety > 0.0 && o.safety <= 1.0))
   {
     std::ostringstream m;
     m << "time step safety factor " << o.safety << ": allowed is (0, 1]";
     throw std::runtime_error(m.str());
   }
-  // each side's own critical step, before weighting
-  fe.set_weight(std::vector<double>(fe.num_nodes(), 1.0));
-  _dt_fe = fe.critical_time_step(fe.lumped_mass());
-  l.weight.clear();
-  _dt_de = particle_critical_time_step(p, l);
-  // FE side: weight field and weighted lumped masses
-  const auto x = fe.node_coordinates();
-  const std::size_t nn = fe.num_nodes();
+}
+
+void CoupledSolver::own_critical_steps()
+{
+  _model.set_weight(std::vector<double>(_model.num_nodes(), 1.0));
+  _dt_fe = _model.critical_time_step(_model.lumped_mass());
+  _dt_de = particle_critical_time_step(_p, _l);
+}
+
+void CoupledSolver::weigh_fe(const CouplingOptions& o)
+{
+  // FE side: the weight field eta and the lumped masses max(eta, floor) M
+  const auto x = _model.node_coordinates();
+  const std::size_t nn = _model.num_nodes();
   std::vector<double> eta(nn);
   bool any_in = false;
   for (std::size_t k = 0; k < nn; ++k)
@@ -49,75 +105,87 @@ CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& 
   if (!any_in)
     throw std::runtime_error("the overlap holds no node of the FE mesh: the overlap must lie "
                              "inside the shell's region");
-  fe.set_weight(eta);
-  _m_fe = fe.lumped_mass();
-  const int bs = fe.block_size();
+  _model.set_weight(eta);
+  _m_fe = _model.lumped_mass();
+  const int bs = _model.block_size();
   for (std::size_t k = 0; k < nn; ++k)
     for (int c = 0; c < bs; ++c)
-      _m_fe[bs * k + c] *= floored(eta[k], floor);
-  // DE side: masses, sphere and link weights
-  const std::size_t np = p.size();
-  p.weight.resize(np);
+      _m_fe[bs * k + c] *= floored(eta[k], o.weight_floor);
+}
+
+void CoupledSolver::weigh_de(const CouplingOptions& o)
+{
+  // DE side: sphere weights 1 - eta, masses and inertias max(1 - eta, floor) m,
+  // link weights 1 - eta at the link's mid-point
+  const std::size_t np = _p.size();
+  _p.weight.resize(np);
   for (std::size_t i = 0; i < np; ++i)
   {
-    const std::array<double, 3> xi{p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2]};
+    const std::array<double, 3> xi{_p.x[3 * i], _p.x[3 * i + 1], _p.x[3 * i + 2]};
     const double w = 1.0 - o.overlap.weight(xi);
-    p.weight[i] = w;
-    p.m[i] *= floored(w, floor);
-    p.inertia[i] *= floored(w, floor);
+    _p.weight[i] = w;
+    _p.m[i] *= floored(w, o.weight_floor);
+    _p.inertia[i] *= floored(w, o.weight_floor);
     if (o.overlap.contains(xi))
       _ids.push_back(static_cast<std::int32_t>(i));
   }
   if (_ids.empty())
     throw std::runtime_error("no particle lies in the overlap: the DE and FE regions must overlap");
-  l.weight.resize(l.size());
-  for (std::size_t k = 0; k < l.size(); ++k)
+  _l.weight.resize(_l.size());
+  for (std::size_t k = 0; k < _l.size(); ++k)
   {
     std::array<double, 3> mid;
     for (int d = 0; d < 3; ++d)
-      mid[d] = 0.5 * (p.x[3 * l.a[k] + d] + p.x[3 * l.b[k] + d]);
-    l.weight[k] = 1.0 - o.overlap.weight(mid);
+      mid[d] = 0.5 * (_p.x[3 * _l.a[k] + d] + _p.x[3 * _l.b[k] + d]);
+    _l.weight[k] = 1.0 - o.overlap.weight(mid);
   }
-  // location in the fictive elements
+}
+
+void CoupledSolver::locate_overlap()
+{
+  // the overlap's particles in the fictive elements (shell) or the cells (solid)
   std::vector<double> pts;
   for (auto i : _ids)
-    pts.insert(pts.end(), {p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2]});
-  _op = fe.is_shell()
-            ? locate({x, fe.nodal_normals(), fe.cell_nodes(), fe.nodes_per_cell(),
-                      fe.material().thickness},
+    pts.insert(pts.end(), {_p.x[3 * i], _p.x[3 * i + 1], _p.x[3 * i + 2]});
+  const auto x = _model.node_coordinates();
+  _op = _model.is_shell()
+            ? locate({x, _model.nodal_normals(), _model.cell_nodes(), _model.nodes_per_cell(),
+                      _model.material().thickness},
                      pts)
-            : locate_in_solid(x, fe.cell_nodes(), fe.nodes_per_cell(), pts);
-  // time step of the coupled system: power iteration on its motions that
-  // satisfy the constraint (the multiplier correction is their mass-
-  // orthogonal projection, whatever dt it is built with)
+            : locate_in_solid(x, _model.cell_nodes(), _model.nodes_per_cell(), pts);
   _m_de.resize(_ids.size());
   for (std::size_t q = 0; q < _ids.size(); ++q)
-    _m_de[q] = p.m[_ids[q]];
+    _m_de[q] = _p.m[_ids[q]];
   _v_de.assign(3 * _ids.size(), 0.0);
-  {
-    const std::size_t nf = _m_fe.size();
-    std::vector<double> mass(_m_fe);
-    for (int rot = 0; rot < 2; ++rot)
-      for (std::size_t i = 0; i < np; ++i)
-        for (int d = 0; d < 3; ++d)
-          mass.push_back(rot ? p.inertia[i] : p.m[i]);
-    const auto f_fe = fe.internal_force_fn();
-    auto f_all = [&](std::span<const double> z, std::span<double> f) {
-      f_fe(z.first(nf), f.first(nf));
-      dem::stiffness_action(p, l, z.subspan(nf), f.subspan(nf));
-    };
-    MultiplierSolver projector(_op, _m_de, _m_fe, 1.0);
-    auto project = [&](std::span<double> z) {
-      for (std::size_t q = 0; q < _ids.size(); ++q)
-        for (int d = 0; d < 3; ++d)
-          _v_de[3 * q + d] = z[nf + 3 * _ids[q] + d];
-      projector.correct(_v_de, z.first(nf), false);
-      for (std::size_t q = 0; q < _ids.size(); ++q)
-        for (int d = 0; d < 3; ++d)
-          z[nf + 3 * _ids[q] + d] = _v_de[3 * q + d];
-    };
-    _dt_coupled = 2.0 / std::sqrt(shell::max_eigenvalue(mass, f_all, 1e-6, 20000, project));
-  }
+}
+
+void CoupledSolver::coupled_time_step(const CouplingOptions& o)
+{
+  // power iteration on the coupled system's motions that satisfy the
+  // constraint (the multiplier correction is their mass-orthogonal
+  // projection, whatever dt it is built with)
+  const std::size_t nf = _m_fe.size(), np = _p.size();
+  std::vector<double> mass(_m_fe);
+  for (int rot = 0; rot < 2; ++rot)
+    for (std::size_t i = 0; i < np; ++i)
+      for (int d = 0; d < 3; ++d)
+        mass.push_back(rot ? _p.inertia[i] : _p.m[i]);
+  const auto f_fe = _model.internal_force_fn();
+  auto f_all = [&](std::span<const double> z, std::span<double> f) {
+    f_fe(z.first(nf), f.first(nf));
+    dem::stiffness_action(_p, _l, z.subspan(nf), f.subspan(nf));
+  };
+  MultiplierSolver projector(_op, _m_de, _m_fe, 1.0);
+  auto project = [&](std::span<double> z) {
+    for (std::size_t q = 0; q < _ids.size(); ++q)
+      for (int d = 0; d < 3; ++d)
+        _v_de[3 * q + d] = z[nf + 3 * _ids[q] + d];
+    projector.correct(_v_de, z.first(nf), false);
+    for (std::size_t q = 0; q < _ids.size(); ++q)
+      for (int d = 0; d < 3; ++d)
+        z[nf + 3 * _ids[q] + d] = _v_de[3 * q + d];
+  };
+  _dt_coupled = 2.0 / std::sqrt(shell::max_eigenvalue(mass, f_all, 1e-6, 20000, project));
   if (o.dt > _dt_coupled)
   {
     std::ostringstream s;
@@ -127,14 +195,7 @@ CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& 
     throw std::runtime_error(s.str());
   }
   _dt = o.dt > 0.0 ? o.dt : o.safety * _dt_coupled;
-  _mult = std::make_unique<MultiplierSolver>(_op, _m_de, _m_fe, _dt);
-  _fe_solver = std::make_unique<shell::ExplicitSolver>(_m_fe, fe.internal_force_fn(), _dt, o.damping_fe);
-  const double rmin = *std::min_element(p.r.begin(), p.r.end());
-  _de_solver = std::make_unique<dem::DemSolver>(p, l, mat, _dt, o.damping_de,
-                                                o.skin > 0.0 ? o.skin : 0.5 * rmin);
 }
-
-CoupledSolver::~CoupledSolver() = default;
 
 double particle_critical_time_step(const dem::Particles& p, const dem::Links& l, double rtol)
 {

@@ -246,7 +246,7 @@ CouplingOperator locate(const ShellGeometry& g, std::span<const double> points,
   const int npc = g.nodes_per_cell;
   if (npc != 3 && npc != 4)
     throw std::runtime_error("fictive elements need triangles (3 nodes) or quadrilaterals (4)");
-  const auto f = fictive_nodes(g);
+  const auto fict = fictive_nodes(g);
   const std::size_t ncell = g.cells.size() / npc, np = points.size() / 3;
   const double maxd = opt.max_distance >= 0.0 ? opt.max_distance : g.thickness;
   // elements and their bounding boxes
@@ -262,8 +262,8 @@ CouplingOperator locate(const ShellGeometry& g, std::span<const double> points,
       const auto node = g.cells[c * npc + k];
       for (int i = 0; i < 3; ++i)
       {
-        el[c].xm[k][i] = f[6 * node + i];
-        el[c].xp[k][i] = f[6 * node + 3 + i];
+        el[c].xm[k][i] = fict[6 * node + i];
+        el[c].xp[k][i] = fict[6 * node + 3 + i];
         for (double v : {el[c].xm[k][i], el[c].xp[k][i]})
         {
           b[i] = std::min(b[i], v);

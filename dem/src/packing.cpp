@@ -417,10 +417,10 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
         for (int j = 0; j < m[1]; ++j)
           for (int k = 0; k < m[2]; ++k)
           {
-            const Point q{g.lo[0] + (i + 0.5) * h3[0], g.lo[1] + (j + 0.5) * h3[1],
-                          g.lo[2] + (k + 0.5) * h3[2]};
-            if (g.sdf(q) < 0.0)
-              cells.push_back(q);
+            const Point centre{g.lo[0] + (i + 0.5) * h3[0], g.lo[1] + (j + 0.5) * h3[1],
+                               g.lo[2] + (k + 0.5) * h3[2]};
+            if (g.sdf(centre) < 0.0)
+              cells.push_back(centre);
           }
       if (cells.size() >= n)
       {

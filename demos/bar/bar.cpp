@@ -161,346 +161,409 @@ double bar_first_frequency(const BarConfig& c, double E, double nu, double rho)
                                                           5.0 / 6.0);
 }
 
-nlohmann::json run_bar(const BarConfig& c)
+namespace
 {
-  check_config(c);
-  Stopwatch clock;
-  const bool tension = c.load == "tension", dynamic = c.regime == "dynamic";
-  const bool use_fe = c.model != "de", use_de = c.model != "fe";
-  const int comp = tension ? 0 : 2;
-  const double L = c.length, w = c.width, h = c.width;
+/// One case of the bar, in the phases of a run: set-up (parameters,
+/// regions, the models, solvers, conditions, probes, output), the time
+/// loop, and the summary. Members are declared in the order they are built:
+/// the coupler last among the models, as it holds the weighted state of the
+/// shell model, the particles and the links until it is destroyed.
+class BarRun
+{
+public:
+  explicit BarRun(const BarConfig& c) : _c(c) {}
 
-  // the same concrete on both sides
-  auto mf = dem::read_material(c.material);
-  dem::Material mat = mf.material;
-  mat.tensile = mat.cohesion = 1e12; // linear elastic validation
-  shell::Material sm;
-  sm.youngs_modulus = c.fe_youngs_modulus > 0.0 ? c.fe_youngs_modulus
-                                                : mf.macroscopic.value("youngs_modulus_pa", mat.youngs_modulus);
-  sm.poisson_ratio = mf.macroscopic.value("poisson_ratio", mat.poisson_ratio);
-  sm.density = mat.density;
-  sm.thickness = h;
-  const double E = sm.youngs_modulus, nu = sm.poisson_ratio, rho = sm.density;
-  const shell::analytic::BeamSection sec{w, h};
-  const double f1 = bar_first_frequency(c, E, nu, rho), T1 = 1.0 / f1;
-  const double force = c.static_force != 0.0 ? c.static_force : (tension ? 1e5 : 2e4);
-  const double d0 = c.end_displacement != 0.0 ? c.end_displacement : (tension ? 5e-5 : 2e-4);
-  const double ramp = c.ramp_time > 0.0 ? c.ramp_time : T1;
-  const double end_time = c.end_time > 0.0 ? c.end_time : (dynamic ? ramp + 4.0 * T1 : 3.0 * T1);
-  const double damping = dynamic ? 0.0 : (c.damping >= 0.0 ? c.damping : 4.0 * std::numbers::pi * f1);
-  if (dynamic && end_time < ramp + 1.5 * T1)
-    bad("end-time [s]", end_time, "at least ramp-time + 1.5 first periods (" + std::to_string(ramp + 1.5 * T1) + " s) to measure a frequency");
-
-  // geometry of the regions
-  const double rmax = 2.0 * c.mean_radius * c.radius_ratio / (1.0 + c.radius_ratio);
-  double fe_end = L, de_start = 0.0;
-  if (c.model == "coupled")
+  nlohmann::json run()
   {
-    const double k = c.overlap_start / c.fe_size;
-    if (std::abs(k - std::round(k)) > 1e-6)
-      bad("overlap-start [m]", c.overlap_start,
-          "a multiple of fe-size (" + std::to_string(c.fe_size) + " m), so the overlap is whole FE layers");
-    de_start = c.overlap_start;
-    fe_end = de_start + c.overlap_layers * c.fe_size;
-    if (!(de_start > 0.0 && fe_end < L - 2.0 * rmax))
-      bad("overlap end [m]", fe_end, "overlap inside (0, length - 2 Rmax): check overlap-start and overlap-layers");
-  }
-  if (use_fe)
-  {
-    const double k = fe_end / c.fe_size, kw = w / c.fe_size;
-    if (std::abs(k - std::round(k)) > 1e-6 || std::abs(kw - std::round(kw)) > 1e-6)
-      bad("fe-size [m]", c.fe_size, "a divisor of the FE region's length and of the width");
+    check_config(_c);
+    resolve_parameters();
+    lay_out_regions();
+    build_fe();
+    build_de();
+    build_solvers();
+    apply_conditions();
+    set_up_probes();
+    open_output();
+    march();
+    return summary();
   }
 
-  // The DE bar's packing starts one mean radius behind the clamp plane x = 0:
-  // the held layer (centres within Rmax of the packing's face) is then
-  // centred on it and the bar is free from x = 0 to L, as the shells are
-  // (a packing from x = 0 would hold the layer centred near x = R: a span
-  // 1.2 % shorter and a first bending frequency 2.4 % higher at R = 1 cm).
-  const double de_from = c.model == "de" ? -c.mean_radius : de_start;
-
-  // FE side
-  std::unique_ptr<shell::FEModel> fe;
-  std::unique_ptr<shell::ExplicitSolver> fe_alone;
-  std::unique_ptr<FeColumns> cols;
-  if (use_fe)
+private:
+  // ---- set-up ---------------------------------------------------------------
+  /// The same concrete on both sides; loads, times and damping resolved
+  /// from the options' "0 = automatic".
+  void resolve_parameters()
   {
-    auto mesh = shell::create_shell_rectangle(MPI_COMM_WORLD, fe_end, w,
-                                              static_cast<int>(std::round(fe_end / c.fe_size)),
-                                              static_cast<int>(std::round(w / c.fe_size)),
-                                              shell::parse_cell(c.cell));
-    fe = std::make_unique<shell::FEModel>(mesh, sm);
-    cols = std::make_unique<FeColumns>(fe->node_coordinates(), fe->block_size(), comp);
+    _tension = _c.load == "tension";
+    _dynamic = _c.regime == "dynamic";
+    _use_fe = _c.model != "de";
+    _use_de = _c.model != "fe";
+    _comp = _tension ? 0 : 2;
+    _mf = dem::read_material(_c.material);
+    _mat = _mf.material;
+    _mat.tensile = _mat.cohesion = 1e12; // linear elastic validation
+    _sm.youngs_modulus = _c.fe_youngs_modulus > 0.0
+                             ? _c.fe_youngs_modulus
+                             : _mf.macroscopic.value("youngs_modulus_pa", _mat.youngs_modulus);
+    _sm.poisson_ratio = _mf.macroscopic.value("poisson_ratio", _mat.poisson_ratio);
+    _sm.density = _mat.density;
+    _sm.thickness = _c.width;
+    _E = _sm.youngs_modulus;
+    _nu = _sm.poisson_ratio;
+    _rho = _sm.density;
+    _f1 = bar_first_frequency(_c, _E, _nu, _rho);
+    const double T1 = 1.0 / _f1;
+    _force = _c.static_force != 0.0 ? _c.static_force : (_tension ? 1e5 : 2e4);
+    _d0 = _c.end_displacement != 0.0 ? _c.end_displacement : (_tension ? 5e-5 : 2e-4);
+    _ramp = _c.ramp_time > 0.0 ? _c.ramp_time : T1;
+    _end_time = _c.end_time > 0.0 ? _c.end_time : (_dynamic ? _ramp + 4.0 * T1 : 3.0 * T1);
+    _damping = _dynamic ? 0.0 : (_c.damping >= 0.0 ? _c.damping : 4.0 * std::numbers::pi * _f1);
+    if (_dynamic && _end_time < _ramp + 1.5 * T1)
+      bad("end-time [s]", _end_time,
+          "at least ramp-time + 1.5 first periods (" + std::to_string(_ramp + 1.5 * T1)
+              + " s) to measure a frequency");
   }
-  // DE side
-  dem::Particles p;
-  dem::Links links;
-  dem::SkinCompensation skin;
-  if (use_de)
+
+  /// Where the shells end and the spheres start (the overlap: whole FE layers).
+  void lay_out_regions()
   {
+    const double L = _c.length;
+    _rmax = 2.0 * _c.mean_radius * _c.radius_ratio / (1.0 + _c.radius_ratio);
+    _fe_end = L;
+    _de_start = 0.0;
+    if (_c.model == "coupled")
+    {
+      const double k = _c.overlap_start / _c.fe_size;
+      if (std::abs(k - std::round(k)) > 1e-6)
+        bad("overlap-start [m]", _c.overlap_start,
+            "a multiple of fe-size (" + std::to_string(_c.fe_size) + " m), so the overlap is whole FE layers");
+      _de_start = _c.overlap_start;
+      _fe_end = _de_start + _c.overlap_layers * _c.fe_size;
+      if (!(_de_start > 0.0 && _fe_end < L - 2.0 * _rmax))
+        bad("overlap end [m]", _fe_end, "overlap inside (0, length - 2 Rmax): check overlap-start and overlap-layers");
+    }
+    if (_use_fe)
+    {
+      const double k = _fe_end / _c.fe_size, kw = _c.width / _c.fe_size;
+      if (std::abs(k - std::round(k)) > 1e-6 || std::abs(kw - std::round(kw)) > 1e-6)
+        bad("fe-size [m]", _c.fe_size, "a divisor of the FE region's length and of the width");
+    }
+    // The DE bar's packing starts one mean radius behind the clamp plane
+    // x = 0: the held layer (centres within Rmax of the packing's face) is
+    // then centred on it and the bar is free from x = 0 to L, as the shells
+    // are (a packing from x = 0 would hold a layer centred near x = R: a span
+    // 1.2 % shorter and a first bending frequency 2.4 % higher at R = 1 cm).
+    _de_from = _c.model == "de" ? -_c.mean_radius : _de_start;
+  }
+
+  void build_fe()
+  {
+    if (!_use_fe)
+      return;
+    auto mesh = shell::create_shell_rectangle(MPI_COMM_WORLD, _fe_end, _c.width,
+                                              static_cast<int>(std::round(_fe_end / _c.fe_size)),
+                                              static_cast<int>(std::round(_c.width / _c.fe_size)),
+                                              shell::parse_cell(_c.cell));
+    _fe = std::make_unique<shell::FEModel>(mesh, _sm);
+    _cols = std::make_unique<FeColumns>(_fe->node_coordinates(), _fe->block_size(), _comp);
+  }
+
+  void build_de()
+  {
+    if (!_use_de)
+      return;
+    const double h = _c.width;
     dem::PackingOptions po;
-    po.mean_radius = c.mean_radius;
-    po.radius_ratio = c.radius_ratio;
-    po.seed = c.seed;
-    const auto region = dem::box_region({de_from, 0.0, -0.5 * h}, {L, w, 0.5 * h});
+    po.mean_radius = _c.mean_radius;
+    po.radius_ratio = _c.radius_ratio;
+    po.seed = _c.seed;
+    const auto region = dem::box_region({_de_from, 0.0, -0.5 * h}, {_c.length, _c.width, 0.5 * h});
     const auto pk = dem::generate_packing(region, po);
     double solid = 0.0;
     for (double r : pk.r)
       solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-    p = dem::make_particles(pk.x, pk.r, mat.density, solid / region.volume);
-    links = dem::create_links(p, dem::lambda_for_bulk_links(region, p.x, p.r, mf.links_per_sphere), mat);
-    if (c.skin_compensation)
+    _p = dem::make_particles(pk.x, pk.r, _mat.density, solid / region.volume);
+    _links = dem::create_links(_p, dem::lambda_for_bulk_links(region, _p.x, _p.r, _mf.links_per_sphere), _mat);
+    if (_c.skin_compensation)
     {
       // the faces' skin, two Rmax deep, stiffened to the bulk's links per
       // sphere: without it the bar is 6.6-9.1 % too compliant in bending
-      // for the E it shows in tension (README)
-      const double rmx = *std::max_element(p.r.begin(), p.r.end());
-      skin = dem::compensate_skin(p, links, region, 2.0 * rmx);
+      // for the E it shows in tension (docs/method.md, "Skin compensation")
+      const double rmx = *std::max_element(_p.r.begin(), _p.r.end());
+      _skin = dem::compensate_skin(_p, _links, region, 2.0 * rmx);
     }
   }
 
-  // solvers
-  std::unique_ptr<bridge::CoupledSolver> coupled;
-  std::unique_ptr<dem::DemSolver> de_alone;
-  shell::ExplicitSolver* fes = nullptr;
-  dem::DemSolver* des = nullptr;
-  double dt = 0.0;
-  nlohmann::json steps_info;
-  if (c.model == "coupled")
+  void build_solvers()
   {
-    bridge::CouplingOptions o;
-    o.overlap = {{1.0, 0.0, 0.0}, fe_end, de_start};
-    o.safety = c.safety;
-    o.damping_fe = o.damping_de = damping;
-    coupled = std::make_unique<bridge::CoupledSolver>(*fe, p, links, mat, o);
-    fes = &coupled->fe();
-    des = &coupled->de();
-    dt = coupled->dt();
-    steps_info = {{"dt_coupled_s", coupled->dt_coupled()}, {"dt_fe_alone_s", coupled->dt_fe()},
-                  {"dt_de_alone_s", coupled->dt_de()}, {"constrained_particles", coupled->constrained()},
-                  {"placed_by_nearest_rule", coupled->coupling().outside()}};
-  }
-  else if (c.model == "fe")
-  {
-    const auto m = fe->lumped_mass();
-    const double dtc = fe->critical_time_step(m);
-    dt = c.safety * dtc;
-    fe_alone = std::make_unique<shell::ExplicitSolver>(m, fe->internal_force_fn(), dt, damping);
-    fes = fe_alone.get();
-    steps_info = {{"dt_critical_s", dtc}};
-  }
-  else
-  {
-    const double dtc = bridge::particle_critical_time_step(p, links);
-    dt = c.safety * dtc;
-    de_alone = std::make_unique<dem::DemSolver>(p, links, mat, dt, damping, 0.5 * c.mean_radius);
-    des = de_alone.get();
-    steps_info = {{"dt_critical_s", dtc}};
-  }
-
-  // supports and loads
-  const int bs = use_fe ? fe->block_size() : 0;
-  std::vector<std::int32_t> end_nodes, end_ids, clamp_ids;
-  std::vector<int> all(6);
-  std::iota(all.begin(), all.end(), 0);
-  if (use_fe)
-  {
-    const auto x = fe->node_coordinates();
-    fes->add_motion({"support", shell::node_dofs(shell::select_nodes(x, [&](const auto& q) { return q[0] < 1e-9; }, "end x = 0"), bs, all),
-                     shell::MotionKind::fixed, {}});
-    if (c.model == "fe")
-      end_nodes = shell::select_nodes(x, [&](const auto& q) { return q[0] > L - 1e-9; }, "loaded end");
-  }
-  if (use_de)
-  {
-    if (c.model == "de")
+    if (_c.model == "coupled")
     {
-      clamp_ids = dem::DemSolver::select(p, [&](const auto& q) { return q[0] < de_from + rmax; }, "end x = 0");
-      des->add_motion({"support", clamp_ids, dem::MotionKind::fixed, {true, true, true}, {}});
+      bridge::CouplingOptions o;
+      o.overlap = {{1.0, 0.0, 0.0}, _fe_end, _de_start};
+      o.safety = _c.safety;
+      o.damping_fe = o.damping_de = _damping;
+      _coupled = std::make_unique<bridge::CoupledSolver>(*_fe, _p, _links, _mat, o);
+      _fes = &_coupled->fe();
+      _des = &_coupled->de();
+      _dt = _coupled->dt();
+      _steps_info = {{"dt_coupled_s", _coupled->dt_coupled()}, {"dt_fe_alone_s", _coupled->dt_fe()},
+                     {"dt_de_alone_s", _coupled->dt_de()}, {"constrained_particles", _coupled->constrained()},
+                     {"placed_by_nearest_rule", _coupled->coupling().outside()}};
     }
-    end_ids = dem::DemSolver::select(p, [&](const auto& q) { return q[0] > L - rmax; }, "loaded end");
-  }
-  const std::array<bool, 3> comps{tension, false, !tension};
-  const std::array<double, 3> dir{tension ? 1.0 : 0.0, 0.0, tension ? 0.0 : 1.0};
-  auto d_of_t = [=](double t) { return d0 * smooth_ramp(t, ramp); };
-  if (!end_nodes.empty())
-  {
-    const std::vector<int> one{comp};
-    const auto dofs = shell::node_dofs(end_nodes, bs, one);
-    if (dynamic)
-      fes->add_motion({"end", dofs, shell::MotionKind::displacement, d_of_t});
-    else
-      fes->add_load({"end", dofs, fe->boundary_load_weights(end_nodes), [=](double) { return force; }});
-  }
-  if (!end_ids.empty())
-  {
-    // Both through a rigid end plate: the end spheres move as one along the
-    // load (an equal share on each would push the few loosely bonded ones
-    // far out and spoil the mean end displacement). In bending the plate is
-    // hinged at its centroid, free to rotate as the shell's loaded edge is:
-    // a plate that only translates clamps the rotation of the end layer
-    // (about 1 cm deep in x) and took 2 % of the clamp's moment (coupled
-    // bar -3.0 % against beam theory, -0.02 % hinged). In tension it only
-    // translates: the paper's end displacement, uniform over the face.
-    const bool hinged = !tension;
-    if (dynamic)
-      des->add_motion({"end", end_ids, dem::MotionKind::displacement, comps, d_of_t, hinged});
+    else if (_c.model == "fe")
+    {
+      const auto m = _fe->lumped_mass();
+      const double dtc = _fe->critical_time_step(m);
+      _dt = _c.safety * dtc;
+      _fe_alone = std::make_unique<shell::ExplicitSolver>(m, _fe->internal_force_fn(), _dt, _damping);
+      _fes = _fe_alone.get();
+      _steps_info = {{"dt_critical_s", dtc}};
+    }
     else
     {
-      const double share = force / end_ids.size();
-      des->add_force({"end", end_ids, dir, [=](double) { return share; }, true, hinged});
+      const double dtc = bridge::particle_critical_time_step(_p, _links);
+      _dt = _c.safety * dtc;
+      _de_alone = std::make_unique<dem::DemSolver>(_p, _links, _mat, _dt, _damping, 0.5 * _c.mean_radius);
+      _des = _de_alone.get();
+      _steps_info = {{"dt_critical_s", dtc}};
     }
   }
-  if (coupled)
-    coupled->start(std::vector<double>(fe->num_dofs(), 0.0), std::vector<double>(fe->num_dofs(), 0.0));
-  else if (fes)
-    fes->set_state(std::vector<double>(fe->num_dofs(), 0.0), std::vector<double>(fe->num_dofs(), 0.0));
-  else
-    des->start();
 
-  // probes: in the DE where there are spheres, else on the shell
-  std::vector<Probe> probes{{"probe_0_75", c.probe_de, {}},
-                            {"probe_0_4351", c.model == "fe" ? c.probe_overlap_fe : c.probe_overlap, {}}};
-  std::vector<std::vector<std::int32_t>> probe_ids(probes.size());
-  for (std::size_t k = 0; k < probes.size(); ++k)
-    if (use_de && probes[k].x > de_start)
-      probe_ids[k] = particles_near(p, probes[k].x, c.mean_radius);
-    else if (!use_fe || probes[k].x > fe_end)
-      throw std::runtime_error("probe x = " + std::to_string(probes[k].x) + " m lies in no model region");
-  auto probe_value = [&](std::size_t k) {
-    return probe_ids[k].empty() ? cols->at(fes->u(), probes[k].x) : mean_displacement(p, probe_ids[k], comp);
-  };
-  auto end_value = [&] { return end_ids.empty() ? cols->at(fes->u(), L) : mean_displacement(p, end_ids, comp); };
-
-  // output
-  std::unique_ptr<shell::XdmfWriter> shell_out;
-  std::unique_ptr<dem::ParticleWriter> part_out;
-  std::ofstream csv;
-  const std::filesystem::path dir_out(c.output);
-  if (!c.output.empty())
+  /// Support at x = 0 and the load at x = length, then the initial state.
+  void apply_conditions()
   {
-    std::filesystem::create_directories(dir_out);
-    if (use_fe)
-      shell_out = std::make_unique<shell::XdmfWriter>(*fe, dir_out / "shell.xdmf");
-    if (use_de)
-      part_out = std::make_unique<dem::ParticleWriter>(dir_out / "particles.xdmf", links, p.size(), false);
-    csv.open(dir_out / "history.csv");
-    csv << "t_s,probe_0_75_m,probe_0_4351_m,end_m\n";
-  }
-  auto write_frame = [&](double t) {
-    if (shell_out)
-      shell_out->write(t, fes->u(), fes->v());
-    if (part_out)
-      part_out->write(t, p, links);
-  };
-
-  const auto nsteps = static_cast<std::int64_t>(std::ceil(end_time / dt));
-  if (!c.quiet)
-    std::printf("# bar: %s model, %s, %s: %zu spheres, %zu shell nodes, dt %.4g s, %lld steps to %.4g s "
-                "(beam theory: first frequency %.5g Hz)\n",
-                c.model.c_str(), c.load.c_str(), c.regime.c_str(), p.size(), use_fe ? fe->num_nodes() : 0,
-                dt, static_cast<long long>(nsteps), end_time, f1);
-  std::vector<double> ts;
-  std::vector<std::vector<double>> after(probes.size());
-  std::vector<double> t_after;
-  bool released = !dynamic;
-  const std::int64_t every = std::max<std::int64_t>(1, nsteps / c.frames);
-  write_frame(0.0);
-  double t = 0.0, step_clock = 0.0;
-  for (std::int64_t k = 1; k <= nsteps; ++k)
-  {
-    if (coupled)
-      coupled->step(k % every == 0 || k == nsteps); // observed where frames are written
-    else if (fes)
+    const double L = _c.length;
+    const int bs = _use_fe ? _fe->block_size() : 0;
+    std::vector<int> all(6);
+    std::iota(all.begin(), all.end(), 0);
+    if (_use_fe)
     {
-      const double s0 = clock.seconds();
-      fes->step();
-      step_clock += clock.seconds() - s0;
+      const auto x = _fe->node_coordinates();
+      _fes->add_motion({"support",
+                        shell::node_dofs(shell::select_nodes(x, [&](const auto& q) { return q[0] < 1e-9; }, "end x = 0"), bs, all),
+                        shell::MotionKind::fixed, {}});
+      if (_c.model == "fe")
+        _end_nodes = shell::select_nodes(x, [&](const auto& q) { return q[0] > L - 1e-9; }, "loaded end");
+    }
+    if (_use_de)
+    {
+      if (_c.model == "de")
+      {
+        const double held_to = _de_from + _rmax;
+        _clamp_ids = dem::DemSolver::select(_p, [&](const auto& q) { return q[0] < held_to; }, "end x = 0");
+        _des->add_motion({"support", _clamp_ids, dem::MotionKind::fixed, {true, true, true}, {}});
+      }
+      const double rmax = _rmax;
+      _end_ids = dem::DemSolver::select(_p, [&](const auto& q) { return q[0] > L - rmax; }, "loaded end");
+    }
+    const std::array<bool, 3> comps{_tension, false, !_tension};
+    const std::array<double, 3> dir{_tension ? 1.0 : 0.0, 0.0, _tension ? 0.0 : 1.0};
+    const double d0 = _d0, ramp = _ramp, force = _force;
+    auto d_of_t = [=](double t) { return d0 * smooth_ramp(t, ramp); };
+    if (!_end_nodes.empty())
+    {
+      const std::vector<int> one{_comp};
+      const auto dofs = shell::node_dofs(_end_nodes, bs, one);
+      if (_dynamic)
+        _fes->add_motion({"end", dofs, shell::MotionKind::displacement, d_of_t});
+      else
+        _fes->add_load({"end", dofs, _fe->boundary_load_weights(_end_nodes), [=](double) { return force; }});
+    }
+    if (!_end_ids.empty())
+    {
+      // Both through a rigid end plate: the end spheres move as one along the
+      // load (an equal share on each would push the few loosely bonded ones
+      // far out and spoil the mean end displacement). In bending the plate
+      // is hinged at its centroid, free to rotate as the shell's loaded edge
+      // is: a plate that only translates clamps the rotation of the end
+      // layer (about 1 cm deep in x) and takes 2 % of the clamp's moment. In
+      // tension it only translates: the paper's end displacement, uniform
+      // over the face.
+      const bool hinged = !_tension;
+      if (_dynamic)
+        _des->add_motion({"end", _end_ids, dem::MotionKind::displacement, comps, d_of_t, hinged});
+      else
+      {
+        const double share = force / _end_ids.size();
+        _des->add_force({"end", _end_ids, dir, [=](double) { return share; }, true, hinged});
+      }
+    }
+    if (_coupled)
+      _coupled->start(std::vector<double>(_fe->num_dofs(), 0.0), std::vector<double>(_fe->num_dofs(), 0.0));
+    else if (_fes)
+      _fes->set_state(std::vector<double>(_fe->num_dofs(), 0.0), std::vector<double>(_fe->num_dofs(), 0.0));
+    else
+      _des->start();
+  }
+
+  /// Probes: in the DE where there are spheres, else on the shell.
+  void set_up_probes()
+  {
+    _probes = {{"probe_0_75", _c.probe_de, {}},
+               {"probe_0_4351", _c.model == "fe" ? _c.probe_overlap_fe : _c.probe_overlap, {}}};
+    _probe_ids.assign(_probes.size(), {});
+    for (std::size_t k = 0; k < _probes.size(); ++k)
+      if (_use_de && _probes[k].x > _de_start)
+        _probe_ids[k] = particles_near(_p, _probes[k].x, _c.mean_radius);
+      else if (!_use_fe || _probes[k].x > _fe_end)
+        throw std::runtime_error("probe x = " + std::to_string(_probes[k].x) + " m lies in no model region");
+  }
+
+  void open_output()
+  {
+    if (_c.output.empty())
+      return;
+    const std::filesystem::path dir(_c.output);
+    std::filesystem::create_directories(dir);
+    if (_use_fe)
+      _shell_out = std::make_unique<shell::XdmfWriter>(*_fe, dir / "shell.xdmf");
+    if (_use_de)
+      _part_out = std::make_unique<dem::ParticleWriter>(dir / "particles.xdmf", _links, _p.size(), false);
+    _csv.open(dir / "history.csv");
+    _csv << "t_s,probe_0_75_m,probe_0_4351_m,end_m\n";
+  }
+
+  // ---- run ------------------------------------------------------------------
+  double probe_value(std::size_t k) const
+  {
+    return _probe_ids[k].empty() ? _cols->at(_fes->u(), _probes[k].x)
+                                 : mean_displacement(_p, _probe_ids[k], _comp);
+  }
+  double end_value() const
+  {
+    return _end_ids.empty() ? _cols->at(_fes->u(), _c.length) : mean_displacement(_p, _end_ids, _comp);
+  }
+  void write_frame(double t)
+  {
+    if (_shell_out)
+      _shell_out->write(t, _fes->u(), _fes->v());
+    if (_part_out)
+      _part_out->write(t, _p, _links);
+  }
+  /// The ramp reached d0: the end is let go.
+  void release()
+  {
+    if (_fes && !_end_nodes.empty())
+      _fes->remove_motion("end");
+    if (_des && !_end_ids.empty())
+      _des->remove_motion("end");
+    _released = true;
+  }
+
+  void march()
+  {
+    _nsteps = static_cast<std::int64_t>(std::ceil(_end_time / _dt));
+    const std::int64_t nsteps = _nsteps;
+    if (!_c.quiet)
+      std::printf("# bar: %s model, %s, %s: %zu spheres, %zu shell nodes, dt %.4g s, %lld steps to %.4g s "
+                  "(beam theory: first frequency %.5g Hz)\n",
+                  _c.model.c_str(), _c.load.c_str(), _c.regime.c_str(), _p.size(), _use_fe ? _fe->num_nodes() : 0,
+                  _dt, static_cast<long long>(nsteps), _end_time, _f1);
+    _after.assign(_probes.size(), {});
+    _released = !_dynamic;
+    const std::int64_t every = std::max<std::int64_t>(1, nsteps / _c.frames);
+    write_frame(0.0);
+    for (std::int64_t k = 1; k <= nsteps; ++k)
+    {
+      if (_coupled)
+        _coupled->step(k % every == 0 || k == nsteps); // observed where frames are written
+      else if (_fes)
+      {
+        const double s0 = _clock.seconds();
+        _fes->step();
+        _step_clock += _clock.seconds() - s0;
+      }
+      else
+        _des->step();
+      const double t = k * _dt;
+      if (!_released && t >= _ramp)
+        release();
+      const double v0 = probe_value(0), v1 = probe_value(1);
+      if (_dynamic && _released)
+      {
+        _t_after.push_back(t);
+        _after[0].push_back(v0);
+        _after[1].push_back(v1);
+      }
+      if (_csv.is_open() && (k % std::max<std::int64_t>(1, nsteps / 2000) == 0 || k == nsteps))
+        _csv << t << ',' << v0 << ',' << v1 << ',' << end_value() << '\n';
+      if (k % every == 0 || k == nsteps)
+        write_frame(t);
+      if (!_c.quiet && (k % std::max<std::int64_t>(1, nsteps / 10) == 0 || k == nsteps))
+        std::printf("  t %.4e s  step %lld/%lld  probe 0.75: %.4e m  probe %.4g: %.4e m  end %.4e m  (%.1f s)\n", t,
+                    static_cast<long long>(k), static_cast<long long>(nsteps), v0, _probes[1].x, v1,
+                    end_value(), _clock.seconds());
+    }
+  }
+
+  // ---- summary --------------------------------------------------------------
+  nlohmann::json summary()
+  {
+    nlohmann::json out = {{"model", _c.model},
+                          {"load", _c.load},
+                          {"regime", _c.regime},
+                          {"particles", _p.size()},
+                          {"links", _links.size()},
+                          {"shell_nodes", _use_fe ? _fe->num_nodes() : 0},
+                          {"youngs_modulus_pa", _E},
+                          {"poisson_ratio", _nu},
+                          {"density_kg_m3", _rho},
+                          {"beam_theory_frequency_hz", _f1},
+                          {"dt_s", _dt},
+                          {"steps", _nsteps},
+                          {"end_time_s", _end_time},
+                          {"time_step", _steps_info}};
+    if (_use_de)
+      out["skin_compensation"] = {{"on", _c.skin_compensation},
+                                  {"spheres", _skin.spheres},
+                                  {"links", _skin.links},
+                                  {"bulk_links_per_sphere", _skin.bulk_links},
+                                  {"max_sphere_factor", _skin.max_factor},
+                                  {"mean_link_factor", _skin.mean_link_factor}};
+    for (std::size_t k = 0; k < _probes.size(); ++k)
+    {
+      nlohmann::json pj = {{"x_m", _probes[k].x}, {"final_displacement_m", probe_value(k)}};
+      if (_dynamic)
+      {
+        pj["first_frequency_hz"] = crossing_frequency(_t_after, _after[k]);
+        pj["amplitude_m"] = amplitude(_after[k]);
+      }
+      out[_probes[k].key] = pj;
+    }
+    if (_dynamic)
+    {
+      out["end_displacement_m"] = _d0;
+      out["ramp_time_s"] = _ramp;
     }
     else
-      des->step();
-    t = k * dt;
-    if (!released && t >= ramp)
-    {
-      // the ramp reached d0: let the end go
-      if (fes && !end_nodes.empty())
-        fes->remove_motion("end");
-      if (des && !end_ids.empty())
-        des->remove_motion("end");
-      released = true;
-    }
-    const double v0 = probe_value(0), v1 = probe_value(1);
-    if (dynamic && released)
-    {
-      t_after.push_back(t);
-      after[0].push_back(v0);
-      after[1].push_back(v1);
-    }
-    if (csv.is_open() && (k % std::max<std::int64_t>(1, nsteps / 2000) == 0 || k == nsteps))
-      csv << t << ',' << v0 << ',' << v1 << ',' << end_value() << '\n';
-    if (k % every == 0 || k == nsteps)
-      write_frame(t);
-    if (!c.quiet && (k % std::max<std::int64_t>(1, nsteps / 10) == 0 || k == nsteps))
-      std::printf("  t %.4e s  step %lld/%lld  probe 0.75: %.4e m  probe %.4g: %.4e m  end %.4e m  (%.1f s)\n", t,
-                  static_cast<long long>(k), static_cast<long long>(nsteps), v0, probes[1].x, v1,
-                  end_value(), clock.seconds());
+      measure_statics(out);
+    timings(out);
+    out["wall_s"] = _clock.seconds();
+    return out;
   }
 
-  nlohmann::json out = {{"model", c.model},
-                        {"load", c.load},
-                        {"regime", c.regime},
-                        {"particles", p.size()},
-                        {"links", links.size()},
-                        {"shell_nodes", use_fe ? fe->num_nodes() : 0},
-                        {"youngs_modulus_pa", E},
-                        {"poisson_ratio", nu},
-                        {"density_kg_m3", rho},
-                        {"beam_theory_frequency_hz", f1},
-                        {"dt_s", dt},
-                        {"steps", nsteps},
-                        {"end_time_s", end_time},
-                        {"time_step", steps_info}};
-  if (use_de)
-    out["skin_compensation"] = {{"on", c.skin_compensation},
-                                {"spheres", skin.spheres},
-                                {"links", skin.links},
-                                {"bulk_links_per_sphere", skin.bulk_links},
-                                {"max_sphere_factor", skin.max_factor},
-                                {"mean_link_factor", skin.mean_link_factor}};
-  for (std::size_t k = 0; k < probes.size(); ++k)
+  /// Beam theory along the bar, over the span from the support to the load:
+  /// a shell support or load acts at its edge (x = 0, L), a held or loaded
+  /// set of spheres at the mean x of their centres (the material between a
+  /// face and the first centres has no links: it is not modelled).
+  void measure_statics(nlohmann::json& out)
   {
-    nlohmann::json pj = {{"x_m", probes[k].x}, {"final_displacement_m", probe_value(k)}};
-    if (dynamic)
-    {
-      pj["first_frequency_hz"] = crossing_frequency(t_after, after[k]);
-      pj["amplitude_m"] = amplitude(after[k]);
-    }
-    out[probes[k].key] = pj;
-  }
-  if (dynamic)
-  {
-    out["end_displacement_m"] = d0;
-    out["ramp_time_s"] = ramp;
-  }
-  else
-  {
-    // beam theory along the bar, over the span from the support to the
-    // load: a shell support or load acts at its edge (x = 0, L), a held or
-    // loaded set of spheres at the mean x of their centres (the material
-    // between a face and the first centres has no links: it is not modelled)
+    const double L = _c.length, E = _E, nu = _nu, force = _force;
+    const bool tension = _tension;
+    const shell::analytic::BeamSection sec{_c.width, _c.width};
     auto mean_x = [&](const std::vector<std::int32_t>& ids) {
       double s = 0.0;
       for (auto i : ids)
-        s += p.x0[3 * i];
+        s += _p.x0[3 * i];
       return s / ids.size();
     };
-    const double x_support = c.model == "de" ? mean_x(clamp_ids) : 0.0;
-    const double x_load = end_ids.empty() ? L : mean_x(end_ids), span = x_load - x_support;
-    const double G = E / (2.0 * (1.0 + nu)), A = sec.area(), I = sec.second_moment(), k = 5.0 / 6.0;
+    const double x_support = _c.model == "de" ? mean_x(_clamp_ids) : 0.0;
+    const double x_load = _end_ids.empty() ? L : mean_x(_end_ids), span = x_load - x_support;
+    const double G = E / (2.0 * (1.0 + nu)), A = sec.area(), I = sec.second_moment(), kappa = 5.0 / 6.0;
     auto theory = [&](double x) {
       const double s = std::clamp(x - x_support, 0.0, span);
       return tension ? force * s / (E * A)
-                     : force / (E * I) * (span * s * s / 2.0 - s * s * s / 6.0) + force * s / (k * G * A);
+                     : force / (E * I) * (span * s * s / 2.0 - s * s * s / 6.0) + force * s / (kappa * G * A);
     };
     const double uend = end_value(), uref = theory(x_load);
     out["beam_span_m"] = span;
@@ -508,59 +571,105 @@ nlohmann::json run_bar(const BarConfig& c)
     out["static_end_displacement_m"] = uend;
     out["reference_end_displacement_m"] = uref;
     out["static_relative_error"] = uend / uref - 1.0;
-    out["damping_per_s"] = damping;
+    out["damping_per_s"] = _damping;
     // shape: FE columns, and 2-radius slabs of spheres
     std::vector<std::array<double, 3>> rows; // x, u, source (0 FE, 1 DE)
-    if (use_fe)
-      for (double x : cols->x())
-        rows.push_back({x, cols->at(fes->u(), x), 0.0});
-    if (use_de)
-      for (double x = de_start + c.mean_radius; x < L; x += 2.0 * c.mean_radius)
+    if (_use_fe)
+      for (double x : _cols->x())
+        rows.push_back({x, _cols->at(_fes->u(), x), 0.0});
+    if (_use_de)
+      for (double x = _de_start + _c.mean_radius; x < L; x += 2.0 * _c.mean_radius)
       {
-        const auto ids = particles_near(p, x, c.mean_radius);
-        rows.push_back({x, mean_displacement(p, ids, comp), 1.0});
+        const auto ids = particles_near(_p, x, _c.mean_radius);
+        rows.push_back({x, mean_displacement(_p, ids, _comp), 1.0});
       }
     double worst = 0.0;
     for (const auto& r : rows)
       worst = std::max(worst, std::abs(r[1] - theory(r[0])) / std::abs(uref));
     out["shape_max_deviation_rel"] = worst;
-    if (tension && use_de)
+    if (tension && _use_de)
     {
       // strain on the middle half of the DE region, by least squares
       double sx = 0, su = 0, sxx = 0, sxu = 0, n = 0;
       for (const auto& r : rows)
-        if (r[2] == 1.0 && r[0] > de_start + 0.25 * (L - de_start) && r[0] < de_start + 0.75 * (L - de_start))
+        if (r[2] == 1.0 && r[0] > _de_start + 0.25 * (L - _de_start) && r[0] < _de_start + 0.75 * (L - _de_start))
         {
           sx += r[0], su += r[1], sxx += r[0] * r[0], sxu += r[0] * r[1], n += 1;
         }
       const double slope = (n * sxu - sx * su) / (n * sxx - sx * sx);
       out["measured_youngs_modulus_pa"] = force / (sec.area() * slope);
     }
-    if (!c.output.empty())
+    if (!_c.output.empty())
     {
-      std::ofstream s(dir_out / "shape.csv");
+      std::ofstream s(std::filesystem::path(_c.output) / "shape.csv");
       s << "x_m,displacement_m,beam_theory_m,source\n";
       for (const auto& r : rows)
         s << r[0] << ',' << r[1] << ',' << theory(r[0]) << ',' << (r[2] == 0.0 ? "fe" : "de") << '\n';
     }
   }
-  if (coupled)
+
+  void timings(nlohmann::json& out) const
   {
-    const auto& tm = coupled->timings();
-    out["step_time_s"] = {{"fe", tm.fe}, {"de", tm.de}, {"multipliers", tm.multipliers}};
+    if (_coupled)
+    {
+      const auto& tm = _coupled->timings();
+      out["step_time_s"] = {{"fe", tm.fe}, {"de", tm.de}, {"multipliers", tm.multipliers}};
+    }
+    else if (_des)
+      out["step_time_s"] = {{"de", _de_alone->timings().forces + _de_alone->timings().neighbours
+                                       + _de_alone->timings().integration}};
+    else
+      out["step_time_s"] = {{"fe", _step_clock}};
+    if (_des)
+      out["de_step_split_s"] = {{"forces", _des->timings().forces},
+                                {"neighbours", _des->timings().neighbours},
+                                {"integration", _des->timings().integration}};
   }
-  else if (des)
-    out["step_time_s"] = {{"de", de_alone->timings().forces + de_alone->timings().neighbours
-                                     + de_alone->timings().integration}};
-  else
-    out["step_time_s"] = {{"fe", step_clock}};
-  if (des)
-    out["de_step_split_s"] = {{"forces", des->timings().forces},
-                              {"neighbours", des->timings().neighbours},
-                              {"integration", des->timings().integration}};
-  out["wall_s"] = clock.seconds();
-  return out;
-}
+
+  // ---- state ----------------------------------------------------------------
+  const BarConfig& _c;
+  Stopwatch _clock;
+  // resolved parameters
+  bool _tension = false, _dynamic = false, _use_fe = false, _use_de = false;
+  int _comp = 0;
+  dem::MaterialFile _mf;
+  dem::Material _mat;
+  shell::Material _sm;
+  double _E = 0.0, _nu = 0.0, _rho = 0.0, _f1 = 0.0, _force = 0.0, _d0 = 0.0, _ramp = 0.0,
+         _end_time = 0.0, _damping = 0.0;
+  // regions
+  double _rmax = 0.0, _fe_end = 0.0, _de_start = 0.0, _de_from = 0.0;
+  // models (the coupler after them: it gives their state back when destroyed)
+  std::unique_ptr<shell::FEModel> _fe;
+  std::unique_ptr<FeColumns> _cols;
+  dem::Particles _p;
+  dem::Links _links;
+  dem::SkinCompensation _skin;
+  std::unique_ptr<shell::ExplicitSolver> _fe_alone;
+  std::unique_ptr<bridge::CoupledSolver> _coupled;
+  std::unique_ptr<dem::DemSolver> _de_alone;
+  shell::ExplicitSolver* _fes = nullptr;
+  dem::DemSolver* _des = nullptr;
+  double _dt = 0.0;
+  nlohmann::json _steps_info;
+  // conditions and probes
+  std::vector<std::int32_t> _end_nodes, _end_ids, _clamp_ids;
+  std::vector<Probe> _probes;
+  std::vector<std::vector<std::int32_t>> _probe_ids;
+  // output
+  std::unique_ptr<shell::XdmfWriter> _shell_out;
+  std::unique_ptr<dem::ParticleWriter> _part_out;
+  std::ofstream _csv;
+  // the run
+  std::int64_t _nsteps = 0;
+  bool _released = false;
+  double _step_clock = 0.0;
+  std::vector<double> _t_after;
+  std::vector<std::vector<double>> _after;
+};
+} // namespace
+
+nlohmann::json run_bar(const BarConfig& c) { return BarRun(c).run(); }
 
 nlohmann::json compare_table(const nlohmann::json& runs, std::string& md)
 {

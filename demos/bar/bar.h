@@ -1,6 +1,6 @@
 #pragma once
 /// @file bar.h
-/// The paper's validation case (section 4; METHOD.md section 5): a concrete
+/// The paper's validation case (section 4; docs/demos.md, "bar"): a concrete
 /// bar 0.85 x 0.25 x 0.25 m, fixed at x = 0, loaded at x = length, modelled
 /// all with shells (fe), coupled (shells from x = 0, spheres to the loaded
 /// end, tied in an overlap of whole FE layers) or all with spheres (de).
@@ -44,7 +44,7 @@ struct BarConfig
   double probe_overlap = 0.4351;  ///< probe in the overlap (de, coupled) [m]
   double probe_overlap_fe = 0.45; ///< the same probe in the FE model [m]
   std::string material;           ///< DE parameter file (from calibrate)
-  double fe_youngs_modulus = 0.0; ///< E of the FE side and of beam theory [Pa]; 0 = the file's measured E
+  double fe_youngs_modulus = 0.0; ///< E of the FE side and of beam theory [Pa]; 0 = the file's macroscopic E (the bar demo passes the E the DE bar shows, bar_modulus)
   bool skin_compensation = true;  ///< stiffen the links of the spheres near the faces (dem/skin.h)
   std::string cell = "quadrilateral";
   double static_force = 0.0;      ///< [N]; 0 = 100 kN tension, 20 kN bending

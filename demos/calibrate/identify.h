@@ -1,7 +1,7 @@
 #pragma once
 /// @file identify.h
 /// Identification of the DE parameters from macroscopic concrete properties
-/// (section 2.2 of the paper, section 2 of METHOD.md), on simulated
+/// (section 2.2 of the paper; docs/method.md section 1.14), on simulated
 /// quasi-static uniaxial tests of one packing, or the mean over several
 /// (IdentifyConfig::packings), of the sample (demos/dem_sample).
 ///
@@ -9,8 +9,8 @@
 /// 1. Elastic, nu: by equation [1], K_s/K_n = (1 - alpha nu)/(1 + nu) depends
 ///    on alpha only (nu being the target), and the sample's Poisson ratio
 ///    depends only on K_s/K_n (the response is homogeneous in the stiffness
-///    scale). So alpha is found by bisection on the sample's nu (it rises
-///    with alpha) between alpha = 0 and alpha = 0.95/nu (K_s -> 0).
+///    scale). So alpha is found by secant steps inside a bracket (bisection
+///    as a fallback) on the sample's nu (it rises with alpha) between alpha = 0 and alpha = 0.95/nu (K_s -> 0).
 /// 2. Elastic, E: the sample's E is proportional to the stiffness scale
 ///    (1 + alpha)/(beta (1 + nu) + gamma (1 - alpha nu)); with gamma fixed,
 ///    beta is solved from one measured E, then checked.

@@ -1,6 +1,6 @@
 // dem_sample: a discrete element sample of concrete (cylinder or square
-// prism) in quasi-static uniaxial tension or compression (METHOD.md section
-// 1 and 2). A dense polydisperse packing is generated (or read), bonded with
+// prism) in quasi-static uniaxial tension or compression (docs/method.md
+// sections 1.1-1.14). A dense polydisperse packing is generated (or read), bonded with
 // cohesive links within lambda (R_a + R_b), and loaded by the platens at a
 // constant strain rate with velocity-proportional damping. It reports the
 // macroscopic Young's modulus (initial tangent), Poisson's ratio, peak stress

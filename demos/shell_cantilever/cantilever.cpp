@@ -34,294 +34,389 @@ std::array<double, 3> to_local(const Placement& p, std::span<const double> x)
 }
 } // namespace
 
-nlohmann::json run_cantilever(const CantileverConfig& cfg)
+namespace
 {
-  Stopwatch clock;
-  if (cfg.load != "axial" && cfg.load != "bending" && cfg.load != "static-tip")
-    throw std::runtime_error("load '" + cfg.load + "': allowed are axial, bending, static-tip");
-  if (cfg.solver != "explicit" && cfg.solver != "direct" && cfg.solver != "both")
-    throw std::runtime_error("solver '" + cfg.solver + "': allowed are explicit, direct, both");
-  if (!(cfg.safety > 0.0 && cfg.safety <= 1.0))
-    throw std::runtime_error("safety factor " + std::to_string(cfg.safety)
-                             + ": must be in (0, 1]");
-  if (cfg.dt < 0.0)
-    throw std::runtime_error("time step " + std::to_string(cfg.dt) + " s: must be > 0 (or 0 for automatic)");
-  if (!(cfg.periods > 0.0))
-    throw std::runtime_error("periods " + std::to_string(cfg.periods) + ": must be > 0");
-  const Cell cell = parse_cell(cfg.cell);
-  const bool solid = cell == Cell::hexahedron || cell == Cell::tetrahedron;
-  const double L = cfg.length, b = cfg.width, h = cfg.material.thickness;
-  validate(cfg.material, !solid);
+/// One cantilever run, in phases: set-up (checks, mesh and model, supports,
+/// references), the direct static solve where asked, the explicit run
+/// (time step, solver and conditions, initial shape, output, time loop) and
+/// the summary.
+class CantileverRun
+{
+public:
+  explicit CantileverRun(const CantileverConfig& cfg) : _cfg(cfg) {}
 
-  // Mesh: structured, or read (assumed to lie along local x from 0 to length).
-  Placement place = cfg.placement;
-  std::shared_ptr<dolfinx::mesh::Mesh> mesh;
-  if (!cfg.mesh_file.empty())
-    mesh = read_mesh(MPI_COMM_WORLD, cfg.mesh_file);
-  else if (solid)
+  nlohmann::json run()
   {
-    Placement p = place;
-    const auto ez = column(place, 2);
-    for (int i = 0; i < 3; ++i)
-      p.origin[i] -= 0.5 * h * ez[i];
-    mesh = create_solid_box(MPI_COMM_WORLD, {L, b, h}, {cfg.nx, cfg.ny, cfg.nz}, cell, p);
-  }
-  else
-    mesh = create_shell_rectangle(MPI_COMM_WORLD, L, b, cfg.nx, cfg.ny, cell, place);
-
-  FEModel model(mesh, cfg.material, parse_force_method(cfg.force_method));
-  const int bs = model.block_size();
-  const auto x = model.node_coordinates();
-  const double tol = 1e-8 * L;
-  auto clamp = select_nodes(x, [&](const auto& p) { return std::abs(to_local(place, p)[0]) < tol; },
-                            "clamped end x = 0");
-  auto tip = select_nodes(x, [&](const auto& p) { return std::abs(to_local(place, p)[0] - L) < tol; },
-                          "loaded end x = length");
-  std::vector<int> all(bs);
-  for (int i = 0; i < bs; ++i)
-    all[i] = i;
-  const auto fixed = node_dofs(clamp, bs, all);
-  const auto ex = column(place, 0), ey = column(place, 1), ez = column(place, 2);
-
-  // References.
-  const double E = cfg.material.youngs_modulus, nu = cfg.material.poisson_ratio,
-               rho = cfg.material.density, k = cfg.material.shear_factor;
-  const analytic::BeamSection sec{b, h};
-  const double f_bend = analytic::timoshenko_cantilever_frequency(E, nu, rho, sec, L, k);
-  double f_ref = cfg.load == "axial" ? analytic::axial_clamped_free_frequency(E, rho, L) : f_bend;
-  const double d_ref = analytic::timoshenko_tip_deflection(cfg.tip_load, E, nu, sec, L, k);
-
-  nlohmann::json out;
-  out["load"] = cfg.load;
-  out["cell"] = cfg.cell;
-  out["model"] = solid ? "solid" : "shell";
-  out["nodes"] = model.num_nodes();
-  out["dofs"] = model.num_dofs();
-  out["cells"] = model.num_cells();
-  out["reference_frequency_hz"] = cfg.load == "static-tip" ? f_bend : f_ref;
-  // static-tip: Timoshenko tip deflection; dynamic: the imposed modal amplitude
-  out["reference_deflection_m"] = cfg.load == "static-tip" ? d_ref : cfg.amplitude;
-
-  const auto direction = cfg.load == "axial" ? ex : ez;
-  auto tip_value = [&](std::span<const double> u)
-  {
-    double s = 0.0;
-    for (auto n : tip)
-      for (int i = 0; i < 3; ++i)
-        s += u[n * bs + i] * direction[i];
-    return s / tip.size();
-  };
-
-  // Tip load vector (static-tip): P along local z, spread over the end.
-  std::vector<std::int32_t> load_dofs;
-  std::vector<double> load_w;
-  if (cfg.load == "static-tip")
-  {
-    const auto w = model.boundary_load_weights(tip);
-    for (std::size_t t = 0; t < tip.size(); ++t)
-      for (int i = 0; i < 3; ++i)
-      {
-        load_dofs.push_back(tip[t] * bs + i);
-        load_w.push_back(w[t] * ez[i]);
-      }
-  }
-
-  if (cfg.load == "static-tip" && cfg.solver != "explicit")
-  {
-    std::vector<double> f(model.num_dofs(), 0.0);
-    for (std::size_t i = 0; i < load_dofs.size(); ++i)
-      f[load_dofs[i]] += cfg.tip_load * load_w[i];
-    const auto u = model.solve_static(f, fixed);
-    out["direct_tip_deflection_m"] = tip_value(u);
-    out["tip_deflection_m"] = tip_value(u);
-    out["relative_error"] = tip_value(u) / d_ref - 1.0;
-    if (cfg.solver == "direct")
+    check();
+    build_model();
+    references();
+    describe();
+    if (_cfg.load == "static-tip" && _cfg.solver != "explicit")
     {
-      out["steps"] = 0;
-      out["dt_s"] = 0.0;
-      out["first_frequency_hz"] = nullptr;
-      out["wall_s"] = clock.seconds();
-      return out;
-    }
-  }
-
-  // Explicit run.
-  const auto mass = model.lumped_mass();
-  const double dt_crit = model.critical_time_step(mass);
-  if (cfg.dt > dt_crit)
-  {
-    std::ostringstream s;
-    s << "time step " << cfg.dt << " s is above the critical time step " << dt_crit
-      << " s of this mesh: use --dt below it, or 0 for " << cfg.safety << " x critical";
-    throw std::runtime_error(s.str());
-  }
-  const double dt = cfg.dt > 0.0 ? cfg.dt : cfg.safety * dt_crit;
-  const double omega_b = 2.0 * std::numbers::pi * f_bend;
-  double damping = cfg.damping;
-  if (damping < 0.0)
-    damping = cfg.load == "static-tip" ? 2.0 * omega_b : 0.0;
-  double t_end = cfg.end_time;
-  if (!(t_end > 0.0))
-    t_end = cfg.load == "static-tip" ? 16.0 / omega_b : cfg.periods / f_ref;
-  const auto nsteps = static_cast<std::int64_t>(std::ceil(t_end / dt));
-
-  ExplicitSolver solver(mass, model.internal_force_fn(), dt, damping);
-  solver.add_motion({"clamp", fixed, MotionKind::fixed, {}});
-  if (cfg.load == "static-tip")
-  {
-    const double P = cfg.tip_load;
-    solver.add_load({"tip load", load_dofs, load_w, [P](double) { return P; }});
-  }
-  std::vector<double> u0(model.num_dofs(), 0.0), v0(model.num_dofs(), 0.0);
-  const double A = cfg.amplitude;
-  for (std::size_t n = 0; n < model.num_nodes(); ++n)
-  {
-    const auto xl = to_local(place, x.subspan(3 * n, 3));
-    double* u = &u0[n * bs];
-    if (cfg.load == "axial")
-      for (int i = 0; i < 3; ++i)
-        u[i] = A * std::sin(0.5 * std::numbers::pi * xl[0] / L) * ex[i];
-    else if (cfg.load == "bending")
-    {
-      const double w = A * analytic::cantilever_mode_shape(xl[0], L);
-      const double slope = A * analytic::cantilever_mode_slope(xl[0], L);
-      for (int i = 0; i < 3; ++i)
+      solve_direct();
+      if (_cfg.solver == "direct")
       {
-        u[i] = w * ez[i];
-        if (solid)
-          u[i] -= slope * xl[2] * ex[i];
-        else
-          u[3 + i] = -slope * ey[i];
+        _out["steps"] = 0;
+        _out["dt_s"] = 0.0;
+        _out["first_frequency_hz"] = nullptr;
+        _out["wall_s"] = _clock.seconds();
+        return _out;
       }
     }
+    resolve_time_step();
+    set_up_solver();
+    initial_shape();
+    open_output();
+    march();
+    report();
+    return _out;
   }
-  if (cfg.load != "static-tip" && cfg.initial != "analytic")
+
+private:
+  // ---- set-up ---------------------------------------------------------------
+  void check()
   {
-    if (cfg.initial == "mode")
+    const CantileverConfig& cfg = _cfg;
+    if (cfg.load != "axial" && cfg.load != "bending" && cfg.load != "static-tip")
+      throw std::runtime_error("load '" + cfg.load + "': allowed are axial, bending, static-tip");
+    if (cfg.solver != "explicit" && cfg.solver != "direct" && cfg.solver != "both")
+      throw std::runtime_error("solver '" + cfg.solver + "': allowed are explicit, direct, both");
+    if (!(cfg.safety > 0.0 && cfg.safety <= 1.0))
+      throw std::runtime_error("safety factor " + std::to_string(cfg.safety) + ": must be in (0, 1]");
+    if (cfg.dt < 0.0)
+      throw std::runtime_error("time step " + std::to_string(cfg.dt) + " s: must be > 0 (or 0 for automatic)");
+    if (!(cfg.periods > 0.0))
+      throw std::runtime_error("periods " + std::to_string(cfg.periods) + ": must be > 0");
+    const Cell cell = parse_cell(cfg.cell);
+    _solid = cell == Cell::hexahedron || cell == Cell::tetrahedron;
+    validate(cfg.material, !_solid);
+  }
+
+  /// Mesh (structured, or read: assumed to lie along local x from 0 to
+  /// length), model, the clamped and loaded ends, the tip load vector.
+  void build_model()
+  {
+    const CantileverConfig& cfg = _cfg;
+    const Cell cell = parse_cell(cfg.cell);
+    const double L = cfg.length, b = cfg.width, h = cfg.material.thickness;
+    const Placement& place = cfg.placement;
+    std::shared_ptr<dolfinx::mesh::Mesh> mesh;
+    if (!cfg.mesh_file.empty())
+      mesh = read_mesh(MPI_COMM_WORLD, cfg.mesh_file);
+    else if (_solid)
     {
-      auto [mode, lambda] = model.lowest_mode(mass, fixed, u0, 4);
-      u0 = std::move(mode);
-      out["mode_frequency_hz"] = std::sqrt(lambda) / (2.0 * std::numbers::pi);
-    }
-    else if (cfg.initial == "static")
-    {
-      std::vector<double> f(model.num_dofs(), 0.0);
-      const auto w = model.boundary_load_weights(tip);
-      for (std::size_t t = 0; t < tip.size(); ++t)
-        for (int i = 0; i < 3; ++i)
-          f[tip[t] * bs + i] = w[t] * direction[i];
-      u0 = model.solve_static(f, fixed);
+      Placement below = place;
+      const auto ez = column(place, 2);
+      for (int i = 0; i < 3; ++i)
+        below.origin[i] -= 0.5 * h * ez[i];
+      mesh = create_solid_box(MPI_COMM_WORLD, {L, b, h}, {cfg.nx, cfg.ny, cfg.nz}, cell, below);
     }
     else
-      throw std::runtime_error("initial shape '" + cfg.initial
-                               + "': allowed are mode, analytic, static");
-    const double scale = A / tip_value(u0);
-    for (double& v : u0)
-      v *= scale;
+      mesh = create_shell_rectangle(MPI_COMM_WORLD, L, b, cfg.nx, cfg.ny, cell, place);
+    _model = std::make_unique<FEModel>(mesh, cfg.material, parse_force_method(cfg.force_method));
+    _bs = _model->block_size();
+    _x = _model->node_coordinates();
+    const double tol = 1e-8 * L;
+    const auto clamp = select_nodes(
+        _x, [&](const auto& q) { return std::abs(to_local(place, q)[0]) < tol; }, "clamped end x = 0");
+    _tip = select_nodes(
+        _x, [&](const auto& q) { return std::abs(to_local(place, q)[0] - L) < tol; }, "loaded end x = length");
+    std::vector<int> all(_bs);
+    for (int i = 0; i < _bs; ++i)
+      all[i] = i;
+    _fixed = node_dofs(clamp, _bs, all);
+    _ex = column(place, 0);
+    _ey = column(place, 1);
+    _ez = column(place, 2);
+    _direction = cfg.load == "axial" ? _ex : _ez;
+    if (cfg.load == "static-tip")
+    {
+      // P along local z, spread over the end
+      const auto w = _model->boundary_load_weights(_tip);
+      for (std::size_t t = 0; t < _tip.size(); ++t)
+        for (int i = 0; i < 3; ++i)
+        {
+          _load_dofs.push_back(_tip[t] * _bs + i);
+          _load_w.push_back(w[t] * _ez[i]);
+        }
+    }
   }
-  solver.set_state(u0, v0);
-  const auto e0 = solver.energy();
-  const double E0 = e0.kinetic + e0.strain;
 
-  std::unique_ptr<XdmfWriter> writer;
-  int frames_written = 0;
-  std::ofstream csv;
-  const std::int64_t every = std::max<std::int64_t>(1, nsteps / std::max(1, cfg.frames));
-  if (!cfg.output_dir.empty())
+  /// Beam theory: Timoshenko bending frequency and tip deflection, c / 4L.
+  void references()
   {
-    std::filesystem::create_directories(cfg.output_dir);
-    writer = std::make_unique<XdmfWriter>(model, std::filesystem::path(cfg.output_dir) / "cantilever.xdmf");
-    writer->write(0.0, solver.u(), solver.v());
-    ++frames_written;
-    csv.open(std::filesystem::path(cfg.output_dir) / "history.csv");
-    csv << "t_s,tip_m,kinetic_J,strain_J,external_work_J,prescribed_work_J,damping_J,imbalance_J\n";
+    const CantileverConfig& cfg = _cfg;
+    const double E = cfg.material.youngs_modulus, nu = cfg.material.poisson_ratio,
+                 rho = cfg.material.density, k = cfg.material.shear_factor;
+    const analytic::BeamSection sec{cfg.width, cfg.material.thickness};
+    _f_bend = analytic::timoshenko_cantilever_frequency(E, nu, rho, sec, cfg.length, k);
+    _f_ref = cfg.load == "axial" ? analytic::axial_clamped_free_frequency(E, rho, cfg.length) : _f_bend;
+    _d_ref = analytic::timoshenko_tip_deflection(cfg.tip_load, E, nu, sec, cfg.length, k);
   }
-  if (!cfg.quiet)
-    std::cout << "dt = " << dt << " s (critical " << dt_crit << " s), " << nsteps
-              << " steps to t = " << t_end << " s, damping " << damping << " 1/s\n"
-              << "      t [s]     kinetic [J]      strain [J]    ext.work [J]   presc.work [J]"
-                 "     damping [J]   imbalance [J]\n";
 
-  std::vector<double> ts, tipv;
-  ts.reserve(nsteps + 1);
-  tipv.reserve(nsteps + 1);
-  ts.push_back(0.0);
-  tipv.push_back(tip_value(solver.u()));
-  double drift = 0.0, imbalance = 0.0, emax = E0;
-  auto report = [&](const EnergyBudget& e, bool print)
+  void describe()
   {
-    if (csv.is_open())
-      csv << solver.time() << "," << tipv.back() << "," << e.kinetic << "," << e.strain << ","
-          << e.external_work << "," << e.prescribed_work << "," << e.damping << ","
-          << e.imbalance() << "\n";
-    if (print && !cfg.quiet)
-      std::cout << std::scientific << std::setprecision(5) << std::setw(11) << solver.time()
+    _out["load"] = _cfg.load;
+    _out["cell"] = _cfg.cell;
+    _out["model"] = _solid ? "solid" : "shell";
+    _out["nodes"] = _model->num_nodes();
+    _out["dofs"] = _model->num_dofs();
+    _out["cells"] = _model->num_cells();
+    _out["reference_frequency_hz"] = _cfg.load == "static-tip" ? _f_bend : _f_ref;
+    // static-tip: Timoshenko tip deflection; dynamic: the imposed modal amplitude
+    _out["reference_deflection_m"] = _cfg.load == "static-tip" ? _d_ref : _cfg.amplitude;
+  }
+
+  /// Mean displacement of the tip along the measured direction.
+  double tip_value(std::span<const double> u) const
+  {
+    double s = 0.0;
+    for (auto n : _tip)
+      for (int i = 0; i < 3; ++i)
+        s += u[n * _bs + i] * _direction[i];
+    return s / _tip.size();
+  }
+
+  // ---- direct solve ---------------------------------------------------------
+  void solve_direct()
+  {
+    std::vector<double> f(_model->num_dofs(), 0.0);
+    for (std::size_t i = 0; i < _load_dofs.size(); ++i)
+      f[_load_dofs[i]] += _cfg.tip_load * _load_w[i];
+    const auto u = _model->solve_static(f, _fixed);
+    _out["direct_tip_deflection_m"] = tip_value(u);
+    _out["tip_deflection_m"] = tip_value(u);
+    _out["relative_error"] = tip_value(u) / _d_ref - 1.0;
+  }
+
+  // ---- explicit run ---------------------------------------------------------
+  void resolve_time_step()
+  {
+    const CantileverConfig& cfg = _cfg;
+    _mass = _model->lumped_mass();
+    _dt_crit = _model->critical_time_step(_mass);
+    if (cfg.dt > _dt_crit)
+    {
+      std::ostringstream s;
+      s << "time step " << cfg.dt << " s is above the critical time step " << _dt_crit
+        << " s of this mesh: use --dt below it, or 0 for " << cfg.safety << " x critical";
+      throw std::runtime_error(s.str());
+    }
+    _dt = cfg.dt > 0.0 ? cfg.dt : cfg.safety * _dt_crit;
+    const double omega_b = 2.0 * std::numbers::pi * _f_bend;
+    _damping = cfg.damping;
+    if (_damping < 0.0)
+      _damping = cfg.load == "static-tip" ? 2.0 * omega_b : 0.0;
+    _t_end = cfg.end_time;
+    if (!(_t_end > 0.0))
+      _t_end = cfg.load == "static-tip" ? 16.0 / omega_b : cfg.periods / _f_ref;
+    _nsteps = static_cast<std::int64_t>(std::ceil(_t_end / _dt));
+  }
+
+  void set_up_solver()
+  {
+    _solver = std::make_unique<ExplicitSolver>(_mass, _model->internal_force_fn(), _dt, _damping);
+    _solver->add_motion({"clamp", _fixed, MotionKind::fixed, {}});
+    if (_cfg.load == "static-tip")
+    {
+      const double P = _cfg.tip_load;
+      _solver->add_load({"tip load", _load_dofs, _load_w, [P](double) { return P; }});
+    }
+  }
+
+  /// The beam's mode shape (axial or bending), refined to the FE model's
+  /// own first mode or replaced by the static shape (--initial), scaled to
+  /// the amplitude at the tip; zero for a static run.
+  void initial_shape()
+  {
+    const CantileverConfig& cfg = _cfg;
+    const double L = cfg.length, A = cfg.amplitude;
+    std::vector<double> u0(_model->num_dofs(), 0.0), v0(_model->num_dofs(), 0.0);
+    for (std::size_t n = 0; n < _model->num_nodes(); ++n)
+    {
+      const auto xl = to_local(cfg.placement, _x.subspan(3 * n, 3));
+      double* u = &u0[n * _bs];
+      if (cfg.load == "axial")
+        for (int i = 0; i < 3; ++i)
+          u[i] = A * std::sin(0.5 * std::numbers::pi * xl[0] / L) * _ex[i];
+      else if (cfg.load == "bending")
+      {
+        const double w = A * analytic::cantilever_mode_shape(xl[0], L);
+        const double slope = A * analytic::cantilever_mode_slope(xl[0], L);
+        for (int i = 0; i < 3; ++i)
+        {
+          u[i] = w * _ez[i];
+          if (_solid)
+            u[i] -= slope * xl[2] * _ex[i];
+          else
+            u[3 + i] = -slope * _ey[i];
+        }
+      }
+    }
+    if (cfg.load != "static-tip" && cfg.initial != "analytic")
+    {
+      if (cfg.initial == "mode")
+      {
+        auto [mode, lambda] = _model->lowest_mode(_mass, _fixed, u0, 4);
+        u0 = std::move(mode);
+        _out["mode_frequency_hz"] = std::sqrt(lambda) / (2.0 * std::numbers::pi);
+      }
+      else if (cfg.initial == "static")
+      {
+        std::vector<double> f(_model->num_dofs(), 0.0);
+        const auto w = _model->boundary_load_weights(_tip);
+        for (std::size_t t = 0; t < _tip.size(); ++t)
+          for (int i = 0; i < 3; ++i)
+            f[_tip[t] * _bs + i] = w[t] * _direction[i];
+        u0 = _model->solve_static(f, _fixed);
+      }
+      else
+        throw std::runtime_error("initial shape '" + cfg.initial + "': allowed are mode, analytic, static");
+      const double scale = A / tip_value(u0);
+      for (double& v : u0)
+        v *= scale;
+    }
+    _solver->set_state(u0, v0);
+  }
+
+  void open_output()
+  {
+    if (!_cfg.output_dir.empty())
+    {
+      const std::filesystem::path dir(_cfg.output_dir);
+      std::filesystem::create_directories(dir);
+      _writer = std::make_unique<XdmfWriter>(*_model, dir / "cantilever.xdmf");
+      _writer->write(0.0, _solver->u(), _solver->v());
+      ++_frames_written;
+      _csv.open(dir / "history.csv");
+      _csv << "t_s,tip_m,kinetic_J,strain_J,external_work_J,prescribed_work_J,damping_J,imbalance_J\n";
+    }
+    if (!_cfg.quiet)
+      std::cout << "dt = " << _dt << " s (critical " << _dt_crit << " s), " << _nsteps
+                << " steps to t = " << _t_end << " s, damping " << _damping << " 1/s\n"
+                << "      t [s]     kinetic [J]      strain [J]    ext.work [J]   presc.work [J]"
+                   "     damping [J]   imbalance [J]\n";
+  }
+
+  /// The energy budget of a frame: to the CSV, and printed where asked.
+  void write_energy(const EnergyBudget& e, bool print)
+  {
+    if (_csv.is_open())
+      _csv << _solver->time() << "," << _tipv.back() << "," << e.kinetic << "," << e.strain << ","
+           << e.external_work << "," << e.prescribed_work << "," << e.damping << ","
+           << e.imbalance() << "\n";
+    if (print && !_cfg.quiet)
+      std::cout << std::scientific << std::setprecision(5) << std::setw(11) << _solver->time()
                 << std::setw(16) << e.kinetic << std::setw(16) << e.strain << std::setw(16)
                 << e.external_work << std::setw(16) << e.prescribed_work << std::setw(16)
                 << e.damping << std::setw(16) << e.imbalance() << std::defaultfloat << "\n";
-  };
-  report(e0, true);
-  const std::int64_t print_every = std::max<std::int64_t>(1, nsteps / 10);
-  for (std::int64_t s = 1; s <= nsteps; ++s)
+  }
+
+  void march()
   {
-    solver.step();
-    ts.push_back(solver.time());
-    tipv.push_back(tip_value(solver.u()));
-    const bool frame = s % every == 0 || s == nsteps;
-    if (s % 10 == 0 || frame)
+    const std::int64_t nsteps = _nsteps;
+    const std::int64_t every = std::max<std::int64_t>(1, nsteps / std::max(1, _cfg.frames));
+    const auto e0 = _solver->energy();
+    const double E0 = e0.kinetic + e0.strain;
+    _ts.reserve(nsteps + 1);
+    _tipv.reserve(nsteps + 1);
+    _ts.push_back(0.0);
+    _tipv.push_back(tip_value(_solver->u()));
+    _emax = E0;
+    write_energy(e0, true);
+    const std::int64_t print_every = std::max<std::int64_t>(1, nsteps / 10);
+    for (std::int64_t s = 1; s <= nsteps; ++s)
     {
-      const auto e = solver.energy();
-      const double tot = e.kinetic + e.strain;
-      emax = std::max({emax, tot, e.external_work});
-      if (damping == 0.0 && cfg.load != "static-tip" && E0 > 0.0)
-        drift = std::max(drift, std::abs(tot - E0) / E0);
-      imbalance = std::max(imbalance, std::abs(e.imbalance()));
-      if (frame)
+      _solver->step();
+      _ts.push_back(_solver->time());
+      _tipv.push_back(tip_value(_solver->u()));
+      const bool frame = s % every == 0 || s == nsteps;
+      if (s % 10 == 0 || frame)
       {
-        if (writer)
+        const auto e = _solver->energy();
+        const double tot = e.kinetic + e.strain;
+        _emax = std::max({_emax, tot, e.external_work});
+        if (_damping == 0.0 && _cfg.load != "static-tip" && E0 > 0.0)
+          _drift = std::max(_drift, std::abs(tot - E0) / E0);
+        _imbalance = std::max(_imbalance, std::abs(e.imbalance()));
+        if (frame)
         {
-          writer->write(solver.time(), solver.u(), solver.v());
-          ++frames_written;
+          if (_writer)
+          {
+            _writer->write(_solver->time(), _solver->u(), _solver->v());
+            ++_frames_written;
+          }
+          write_energy(e, s % print_every == 0 || s == nsteps);
         }
-        report(e, s % print_every == 0 || s == nsteps);
       }
     }
+    if (_writer)
+      _writer->close();
   }
-  if (writer)
-    writer->close();
 
-  out["frames_written"] = frames_written;
-  out["dt_s"] = dt;
-  out["dt_critical_s"] = dt_crit;
-  out["steps"] = solver.steps();
-  out["end_time_s"] = solver.time();
-  out["damping_per_s"] = damping;
-  out["energy_balance_error"] = emax > 0.0 ? imbalance / emax : 0.0;
-  if (cfg.load == "static-tip")
+  // ---- summary --------------------------------------------------------------
+  void report()
   {
-    const double d = tipv.back();
-    out["explicit_tip_deflection_m"] = d;
-    if (cfg.solver == "explicit")
+    _out["frames_written"] = _frames_written;
+    _out["dt_s"] = _dt;
+    _out["dt_critical_s"] = _dt_crit;
+    _out["steps"] = _solver->steps();
+    _out["end_time_s"] = _solver->time();
+    _out["damping_per_s"] = _damping;
+    _out["energy_balance_error"] = _emax > 0.0 ? _imbalance / _emax : 0.0;
+    if (_cfg.load == "static-tip")
     {
-      out["tip_deflection_m"] = d;
-      out["relative_error"] = d / d_ref - 1.0;
+      const double d = _tipv.back();
+      _out["explicit_tip_deflection_m"] = d;
+      if (_cfg.solver == "explicit")
+      {
+        _out["tip_deflection_m"] = d;
+        _out["relative_error"] = d / _d_ref - 1.0;
+      }
+      else
+        _out["explicit_vs_direct"] = d / _out["direct_tip_deflection_m"].get<double>() - 1.0;
+      const auto e = _solver->energy();
+      _out["final_kinetic_over_strain"] = e.strain > 0.0 ? e.kinetic / e.strain : 0.0;
+      _out["first_frequency_hz"] = nullptr;
     }
     else
-      out["explicit_vs_direct"] = d / out["direct_tip_deflection_m"].get<double>() - 1.0;
-    const auto e = solver.energy();
-    out["final_kinetic_over_strain"] = e.strain > 0.0 ? e.kinetic / e.strain : 0.0;
-    out["first_frequency_hz"] = nullptr;
+    {
+      const double f = crossing_frequency(_ts, _tipv);
+      _out["first_frequency_hz"] = f;
+      _out["relative_error"] = f / _f_ref - 1.0;
+      _out["tip_deflection_m"] = amplitude(_tipv);
+      _out["energy_drift"] = _drift;
+    }
+    _out["wall_s"] = _clock.seconds();
   }
-  else
-  {
-    const double f = crossing_frequency(ts, tipv);
-    out["first_frequency_hz"] = f;
-    out["relative_error"] = f / f_ref - 1.0;
-    out["tip_deflection_m"] = amplitude(tipv);
-    out["energy_drift"] = drift;
-  }
-  out["wall_s"] = clock.seconds();
-  return out;
-}
+
+  // ---- state ----------------------------------------------------------------
+  const CantileverConfig& _cfg;
+  Stopwatch _clock;
+  nlohmann::json _out;
+  // the model
+  bool _solid = false;
+  std::unique_ptr<FEModel> _model;
+  int _bs = 0;
+  std::span<const double> _x;
+  std::vector<std::int32_t> _tip, _fixed, _load_dofs;
+  std::vector<double> _load_w;
+  std::array<double, 3> _ex{}, _ey{}, _ez{}, _direction{};
+  // references
+  double _f_bend = 0.0, _f_ref = 0.0, _d_ref = 0.0;
+  // the explicit run
+  std::vector<double> _mass;
+  double _dt_crit = 0.0, _dt = 0.0, _damping = 0.0, _t_end = 0.0;
+  std::int64_t _nsteps = 0;
+  std::unique_ptr<ExplicitSolver> _solver;
+  std::unique_ptr<XdmfWriter> _writer;
+  int _frames_written = 0;
+  std::ofstream _csv;
+  std::vector<double> _ts, _tipv;
+  double _drift = 0.0, _imbalance = 0.0, _emax = 0.0;
+};
+} // namespace
+
+nlohmann::json run_cantilever(const CantileverConfig& cfg) { return CantileverRun(cfg).run(); }
 
 } // namespace dembridge::demo

@@ -216,14 +216,14 @@ FEModel::FEModel(std::shared_ptr<dolfinx::mesh::Mesh> mesh, const Material& mate
   I.U = std::make_shared<Function<double>>(I.V);
   std::fill(I.eta->x()->mutable_array().begin(), I.eta->x()->mutable_array().end(), 1.0);
 
-  auto c = [](double v) { return std::make_shared<const Constant<double>>(v); };
-  I.constants = {{"E", c(material.youngs_modulus)}, {"nu", c(material.poisson_ratio)},
-                 {"rho", c(material.density)}};
+  auto constant = [](double v) { return std::make_shared<const Constant<double>>(v); };
+  I.constants = {{"E", constant(material.youngs_modulus)}, {"nu", constant(material.poisson_ratio)},
+                 {"rho", constant(material.density)}};
   if (fs.shell)
   {
-    I.constants["h"] = c(material.thickness);
-    I.constants["k_shear"] = c(material.shear_factor);
-    I.constants["c_drill"] = c(material.drilling);
+    I.constants["h"] = constant(material.thickness);
+    I.constants["k_shear"] = constant(material.shear_factor);
+    I.constants["c_drill"] = constant(material.drilling);
   }
   I.a = std::make_shared<Form<double>>(dolfinx::fem::create_form<double>(
       *fs.a, {I.V, I.V}, {{"eta", I.eta}}, I.constants, {}));

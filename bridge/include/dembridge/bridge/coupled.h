@@ -1,7 +1,7 @@
 #pragma once
 /// @file coupled.h
 /// The explicit bridging-domain coupling of a DE assembly with a shell or a
-/// 3D solid FE model (METHOD.md sections 3 and 4): energy weights on both sides, the particles
+/// 3D solid FE model (docs/method.md, "The bridging-domain coupling"): energy weights on both sides, the particles
 /// of the overlap tied to the shell's motion through fictive elements, and
 /// one step = both sides' half kicks, the multiplier correction of the
 /// half-step velocities, then both sides' drift, forces and second half kick.
@@ -69,15 +69,26 @@ double particle_critical_time_step(const dem::Particles& p, const dem::Links& l,
 class CoupledSolver
 {
 public:
-  /// Sets the weights on both sides (the model's weight field, the particles'
-  /// masses, the links' weights), locates the particles of the overlap and
+  /// Sets the weights on both sides, locates the particles of the overlap and
   /// factorises the multiplier matrix.
-  /// @throws std::runtime_error: no particle in the overlap, an overlap
-  ///   outside the FE mesh, a particle in no fictive element, bad weights or a
-  ///   time step above the coupled estimate.
+  ///
+  /// Ownership: while it lives, the coupler holds the weighted state of the
+  /// caller's model, particles and links: the model's weight field (eta),
+  /// the particles' masses and inertias (scaled by max(1 - eta, floor)),
+  /// `p.weight` and `l.weight`. It gives them back (the masses and inertias
+  /// as they were, the weights cleared, the model's field 1) when it is
+  /// destroyed, and when its constructor throws. Particles or links that
+  /// already carry weights are refused: a second coupler on the same arrays
+  /// would weight them twice.
+  /// @throws std::runtime_error: particles or links already weighted, no
+  ///   particle in the overlap, an overlap outside the FE mesh, a particle in
+  ///   no fictive element, bad weights or a time step above the coupled
+  ///   estimate.
   CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& l, const dem::Material& mat,
                 const CouplingOptions& o);
   ~CoupledSolver();
+  CoupledSolver(const CoupledSolver&) = delete;
+  CoupledSolver& operator=(const CoupledSolver&) = delete;
 
   shell::ExplicitSolver& fe() { return *_fe_solver; }
   dem::DemSolver& de() { return *_de_solver; }
@@ -113,9 +124,19 @@ public:
   const CoupledTimings& timings() const { return _time; }
 
 private:
+  // set-up phases of the constructor, in order
+  static void validate(const CouplingOptions& o);
+  void own_critical_steps();                        // each side's, unweighted
+  void weigh_fe(const CouplingOptions& o);          // weight field, FE masses
+  void weigh_de(const CouplingOptions& o);          // masses, sphere and link weights
+  void locate_overlap();                            // G_FE of the overlap's particles
+  void coupled_time_step(const CouplingOptions& o); // and the step to use
+  void give_back() noexcept;                        // the caller's masses and weights
   void correct(bool half_step, bool residual = true);
   shell::FEModel& _model;
   dem::Particles& _p;
+  dem::Links& _l;
+  std::vector<double> _m_given, _inertia_given; // the caller's masses and inertias
   std::vector<std::int32_t> _ids;  // constrained particles
   CouplingOperator _op;
   std::vector<double> _m_fe, _m_de, _v_de;

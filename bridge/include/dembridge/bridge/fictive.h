@@ -1,7 +1,7 @@
 #pragma once
 /// @file fictive.h
 /// Fictive 3D elements around a shell mid-surface (the paper's equations [5]
-/// and [6], METHOD.md section 4), the location of particles in them, and the
+/// and [6], docs/method.md sections 3.3-3.5), the location of particles in them, and the
 /// interpolation operator G_FE that gives a particle's velocity from the
 /// shell's nodal translations and rotations.
 ///

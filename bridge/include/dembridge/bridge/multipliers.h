@@ -1,7 +1,7 @@
 #pragma once
 /// @file multipliers.h
 /// The Lagrange-multiplier velocity correction of the explicit bridging-
-/// domain coupling (METHOD.md section 3, steps 3 and 4): for trial velocities
+/// domain coupling (docs/method.md section 3.6): for trial velocities
 /// v*_DE (constrained particles) and v*_FE (shell dofs),
 ///   A lambda = G_DE v*_DE - G_FE v*_FE,
 ///   A = dt (G_DE m~^-1 G_DE^T + G_FE M~^-1 G_FE^T)   (SPD, 3 x 3 blocks),

@@ -2,7 +2,7 @@
 /// @file weight.h
 /// Energy weight eta(x) of the bridging-domain method (paper's equation [3]):
 /// 1 in the FE-only region, 0 in the DE-only region, linear across the
-/// overlap (METHOD.md section 3).
+/// overlap (docs/method.md section 3.1).
 
 #include <array>
 

@@ -1,7 +1,7 @@
 #pragma once
 /// @file assembly.h
 /// A bonded sphere assembly: particles (structure of arrays), cohesive links
-/// and the concrete material. METHOD.md section 1.
+/// and the concrete material. docs/method.md sections 1.1-1.4.
 
 #include "dembridge/dem/law.h"
 #include "dembridge/dem/stiffness.h"
@@ -65,7 +65,7 @@ struct Particles
 /// again); 0 if every coordinate is 0.
 double position_quantum(std::span<const double> x);
 
-/// Spheres of solid density rho_s = rho_bulk / packing_fraction (METHOD.md).
+/// Spheres of solid density rho_s = rho_bulk / packing_fraction (docs/method.md section 1.1).
 /// The centres are rounded to multiples of position_quantum(x) (each moves
 /// by at most q/2, an ulp of the largest coordinate).
 /// @param x centres (n, 3) [m]; @param r radii (n) [m], > 0

@@ -1,6 +1,6 @@
 #pragma once
 /// @file law.h
-/// The concrete interaction law of the DE model (METHOD.md section 1, after
+/// The concrete interaction law of the DE model (docs/method.md sections 1.5-1.8, after
 /// Hentz, Donze & Daudeville 2004) as pure functions: no state of their own,
 /// the history passed in and out. Forces in N, lengths in m. Sign convention:
 /// normal force F_n > 0 in tension; the compression force is F_c = -F_n.
@@ -49,7 +49,7 @@ struct NormalForce
 /// Elastic (K_n delta) up to the peak S_int T at delta_e = S_int T / K_n;
 /// then linear softening with slope -K_n / zeta to zero at
 /// delta_r = (1 + zeta) delta_e, where the link breaks. Unloading from a
-/// softened state follows the secant to the origin (METHOD.md choice).
+/// softened state follows the secant to the origin (a choice of the project: docs/method.md section 1.6).
 /// Compression is elastic and never breaks the link.
 /// @param delta_max largest elongation reached so far (history; start at 0)
 NormalForce link_normal_force(double delta, double delta_max, const LinkLaw& p);

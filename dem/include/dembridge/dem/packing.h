@@ -4,8 +4,8 @@
 /// signed-distance function (box, cylinder, or any), and plain `x y z r`
 /// packing files.
 ///
-/// Method (a collective-rearrangement generator, METHOD.md allows any method
-/// that meets the figures): radii are drawn from the distribution, their
+/// Method (a collective-rearrangement generator; any method that meets
+/// the figures below would do): radii are drawn from the distribution, their
 /// number set by the target packing fraction and the region's volume;
 /// centres start one per cell of a grid (cells picked at random, centres
 /// jittered within them) with radii scaled down to 0.8; then sweeps push every

@@ -1,7 +1,7 @@
 #pragma once
 /// @file skin.h
-/// Free-surface correction of the links' stiffness (choice: METHOD.md leaves
-/// the boundary to the project).
+/// Free-surface correction of the links' stiffness (a choice of the project:
+/// the method says nothing of free surfaces; docs/method.md section 1.13).
 ///
 /// A sphere at a free face misses the links it would have to the material
 /// beyond the face: the outer layer lies flat on the face with ~7 links per

@@ -1,179 +1,26 @@
 #pragma once
 /// @file solver.h
-/// The DEM force loop (it only calls the laws of law.h) and the explicit
-/// integrator (velocity Verlet: half kick, drift, forces, half kick) with
-/// boundary conditions on particle sets, velocity-proportional damping and
-/// the energy budget. OpenMP threads over links and spheres; results do not
-/// depend on the thread count.
+/// The explicit DEM integrator (velocity Verlet: half kick, drift, forces,
+/// half kick) with the boundary conditions of conditions.h, velocity-
+/// proportional damping and the energy budget. The force loop it calls each
+/// step is in forces.h.
 
 #include "dembridge/dem/assembly.h"
+#include "dembridge/dem/conditions.h"
+#include "dembridge/dem/forces.h"
 #include "dembridge/dem/neighbours.h"
 
 #include <array>
-#include <climits>
 #include <cstdint>
-#include <utility>
-#include <vector>
 #include <functional>
-#include <span>
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace dembridge::dem
 {
 
-/// Energy dissipated or stored in the force loop since the start [J].
-struct ForceCounters
-{
-  double friction = 0.0;   ///< sliding of contacts
-  double breakage = 0.0;   ///< elastic energy released when links break
-  /// Set to track cohesion_demand (costs a comparison per link and call).
-  bool track_cohesion = false;
-  /// The smallest cohesion C0 [Pa] at which no intact link's shear force
-  /// would have reached the Mohr-Coulomb cap in the calls so far: the largest
-  /// (|F_s| + F_n tan phi_i) / S_int (F_n > 0 in tension) over links and
-  /// calls. C0 enters nothing else, so a run with another C0 above it (all
-  /// else equal) is the same bit for bit: a test can be reused across C0.
-  double cohesion_demand = 0.0;
-};
-
-/// How the items of the force loop (links, or neighbour pairs; sorted by
-/// (a, b)) are shared between T threads: thread t owns the spheres
-/// [n t / T, n (t + 1) / T) and computes the items whose a it owns, adding
-/// each item's force to both spheres. Items whose b belongs to a later
-/// thread ("cross" items) are computed first into a buffer, which their b
-/// sphere reads before its own items: every sphere then sums its items in the
-/// same order (b side in item order, then a side) whatever T is.
-struct SweepIndex
-{
-  std::vector<std::int32_t> first;      ///< items with a = i: [first[i], first[i + 1])
-  std::vector<std::size_t> bounds;      ///< spheres of thread t: [bounds[t], bounds[t + 1]) (T + 1)
-  std::vector<std::int32_t> cross_first; ///< first buffer slot of each thread (T + 1)
-  std::vector<std::int32_t> in_first, in; ///< slots of the cross items into sphere b (CSR)
-  std::vector<std::int32_t> cross_i, cross_k; ///< per slot: the cross item's sphere a and item
-  std::vector<double> out;              ///< per cross item: force on b (3), torque factor q (3)
-  std::vector<std::vector<double>> geometry; ///< per thread: branches of one sphere's items
-  int threads = 0;
-  /// @throws std::runtime_error if the items are not sorted or out of range
-  void build(std::size_t np, std::span<const std::int32_t> a, std::span<const std::int32_t> b,
-             int threads);
-  std::size_t bytes() const;
-};
-
-/// Scratch space and index structures of the force loop, kept between calls
-/// so that a step allocates nothing (once sized). Rebuilt by compute_forces
-/// when the links, the neighbour pairs or the thread count change.
-struct ForceScratch
-{
-  /// per sphere, 64-byte aligned: centre (3), radius, rotation over the step
-  /// (StepRotation: u (3), k), what a link reads of its spheres
-  std::vector<double> records;
-  SweepIndex links, pairs;
-  std::vector<double> pair_slip; ///< per pair: energy dissipated by friction in the step [J]
-  std::vector<std::vector<std::pair<std::int32_t, double>>> broken; ///< per thread
-  std::vector<std::pair<std::int32_t, double>> broken_all;
-  std::vector<std::int32_t> broken_ids;
-  std::vector<double> demand;    ///< per thread: ForceCounters::cohesion_demand
-  const std::int32_t* links_for = nullptr; ///< the link array the index was built for
-  std::size_t links_size = 0, pairs_version = SIZE_MAX;
-  std::size_t bytes() const;
-};
-
-/// Computes forces and torques on all particles from the intact links and
-/// the contacts, using p.w as the angular velocity over the step (the
-/// spheres' rotations R = exp(omega dt), for the incremental shear). Updates
-/// link and contact history, breaks links (a link broken now hands over to a
-/// contact in the same call). Each link's force is computed once; each
-/// sphere gathers its links' forces in a fixed order, so the result is the
-/// same bit for bit whatever the number of OpenMP threads.
-void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
-                    ForceCounters& c, ForceScratch& scratch);
-/// Same, with its own scratch space.
-void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
-                    ForceCounters& c);
-
-/// Assemblies of fewer spheres than this run their step on one thread (the
-/// team's start and barriers would cost more than they save); default 2048.
-void set_min_spheres_per_thread_team(std::size_t n);
-std::size_t min_spheres_per_thread_team();
-
-/// Elastic energy stored in intact links and contacts [J].
-double elastic_energy(const Particles& p, const Links& l, const NeighbourList& nl,
-                      const Material& mat);
-
-/// Energy dissipated by tensile softening of all links [J].
-double softening_energy(const Particles& p, const Links& l, const Material& mat);
-
-/// Action of the linearised stiffness of the intact links about the current
-/// positions, f = K u (the links' weights included; contacts left out):
-/// u and f hold 6 values per particle, translations (n, 3) then rotations
-/// (n, 3) [m, rad -> N, N m]. The relative displacement of the link's contact
-/// point is (u_b - u_a) - (l_a theta_a + l_b theta_b) x n, its normal part
-/// resisted by K_n, its tangential part by K_s, as the law does for small
-/// increments. Used for the power-iteration estimates of the critical step.
-void stiffness_action(const Particles& p, const Links& l, std::span<const double> u,
-                      std::span<double> f);
-/// Upper bound of the largest eigenvalue of M^-1 K of the linearised
-/// assembly (links and current contacts; translations and rotations), by
-/// block Gershgorin on M^-1/2 K M^-1/2; the critical step is 2/sqrt(bound).
-double critical_time_step(const Particles& p, const Links& l);
-
-using History = std::function<double(double)>;
-
-enum class MotionKind
-{
-  fixed,        ///< translations and rotations held at zero velocity
-  velocity,     ///< the chosen components follow value(t) [m/s]
-  displacement  ///< the chosen components follow x0 + value(t) [m]
-};
-
-/// A kinematic condition on a set of particles.
-struct ParticleMotion
-{
-  std::string name;
-  std::vector<std::int32_t> ids;
-  MotionKind kind = MotionKind::fixed;
-  std::array<bool, 3> components{true, true, true}; ///< for velocity/displacement
-  History value;
-  /// For velocity/displacement: the set follows value(t) as a plate hinged
-  /// at its centroid: for each chosen component, the set's mass-weighted mean
-  /// follows value(t) and its rotations normal to that component stay free
-  /// (the component is an affine function of position, its slopes fitted to
-  /// the spheres' own velocities as for ParticleForce::plate_rotates).
-  /// Its spheres are kicked by their forces like free ones, then moved as
-  /// the plate; its reaction is the force on the plate's mean motion. It
-  /// shares no sphere with another condition or a loading plate. Without it
-  /// each sphere follows value(t): the set cannot rotate.
-  bool rotates = false;
-  /// A hinged set: it rotates and moves (a fixed set holds everything).
-  bool hinged() const { return rotates && kind != MotionKind::fixed; }
-};
-
-/// External force on each particle of a set: direction * value(t) [N].
-struct ParticleForce
-{
-  std::string name;
-  std::vector<std::int32_t> ids;
-  std::array<double, 3> direction{1.0, 0.0, 0.0};
-  History value;
-  /// Load through a rigid plate: the spheres' velocity components along
-  /// `direction` are made equal (their mass-weighted mean, so momentum is
-  /// kept) after every kick, so the set moves as one along the load and the
-  /// total force spreads as a stiff loading plate spreads it, whatever each
-  /// sphere's bonds (an equal share per sphere would push a loosely bonded
-  /// surface sphere far out). Other components stay free. The set must not
-  /// share spheres with a kinematic condition.
-  bool plate = false;
-  /// With `plate`: the plate may also rotate, as one loaded through a ball
-  /// joint: the velocity components along `direction` are made an affine
-  /// function of position, v_d = V + g . (x - c) with g normal to the load
-  /// (the rigid rotations' share of v_d), fitted by mass-weighted least
-  /// squares (so momentum and the moments about the centroid c are kept).
-  /// The plate then carries the load and no moment. Without it, the plate
-  /// only translates: it holds its own rotation, and so the end of a bent
-  /// bar (a plate of end spheres a centimetre deep in x clamps that layer's
-  /// rotation and takes ~2 % of the moment).
-  bool plate_rotates = false;
-};
+struct ForceScratch;
 
 /// Energy budget [J]: kinetic + elastic + softening + breakage + friction +
 /// damping = initial + external_work + prescribed_work.
@@ -202,6 +49,9 @@ public:
   /// @param dt time step [s], > 0; @param damping c [1/s] (force -c m v,
   /// torque -c I omega), >= 0; @param skin neighbour skin [m], > 0
   DemSolver(Particles& p, Links& l, const Material& mat, double dt, double damping, double skin);
+  ~DemSolver();
+  DemSolver(const DemSolver&) = delete;
+  DemSolver& operator=(const DemSolver&) = delete;
 
   /// Selects particles whose centre satisfies pred. @throws naming `what` if none.
   static std::vector<std::int32_t>
@@ -264,7 +114,7 @@ private:
   // history: at the half step (begin, with its reaction and work), or at
   // the full step
   void move_hinged(std::size_t motion, double t_half, double t_new, bool begin);
-  ForceScratch _scratch;
+  std::unique_ptr<ForceScratch> _scratch; // the force loop's (force_loop.h, internal)
   double _dt, _c, _t = 0.0;
   std::int64_t _steps = 0;
   bool _in_step = false;

@@ -7,7 +7,7 @@ namespace dembridge::dem
 {
 
 /// Packing-dependent coefficients of equation [1], identified on the
-/// assembly (METHOD.md section 2).
+/// assembly (docs/method.md section 1.4).
 struct MicroMacro
 {
   double alpha;
@@ -22,7 +22,7 @@ struct LinkStiffness
   double ks;
 };
 
-/// Interaction surface S_int = pi min(Ra, Rb)^2 [m^2] (METHOD.md choice).
+/// Interaction surface S_int = pi min(Ra, Rb)^2 [m^2] (a choice of the project: docs/method.md section 1.4).
 /// @throws std::runtime_error if a radius is not > 0.
 double interaction_surface(double ra, double rb);
 

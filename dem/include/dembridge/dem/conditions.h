@@ -1,0 +1,75 @@
+#pragma once
+/// @file conditions.h
+/// Boundary conditions of the DEM on sets of spheres: kinematic conditions
+/// (fixed, prescribed velocity or displacement, optionally hinged) and
+/// external forces (optionally through a rigid, possibly rotating, loading
+/// plate). DemSolver (solver.h) applies them.
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace dembridge::dem
+{
+
+using History = std::function<double(double)>;
+
+enum class MotionKind
+{
+  fixed,        ///< translations and rotations held at zero velocity
+  velocity,     ///< the chosen components follow value(t) [m/s]
+  displacement  ///< the chosen components follow x0 + value(t) [m]
+};
+
+/// A kinematic condition on a set of particles.
+struct ParticleMotion
+{
+  std::string name;
+  std::vector<std::int32_t> ids;
+  MotionKind kind = MotionKind::fixed;
+  std::array<bool, 3> components{true, true, true}; ///< for velocity/displacement
+  History value;
+  /// For velocity/displacement: the set follows value(t) as a plate hinged
+  /// at its centroid: for each chosen component, the set's mass-weighted mean
+  /// follows value(t) and its rotations normal to that component stay free
+  /// (the component is an affine function of position, its slopes fitted to
+  /// the spheres' own velocities as for ParticleForce::plate_rotates).
+  /// Its spheres are kicked by their forces like free ones, then moved as
+  /// the plate; its reaction is the force on the plate's mean motion. It
+  /// shares no sphere with another condition or a loading plate. Without it
+  /// each sphere follows value(t): the set cannot rotate.
+  bool rotates = false;
+  /// A hinged set: it rotates and moves (a fixed set holds everything).
+  bool hinged() const { return rotates && kind != MotionKind::fixed; }
+};
+
+/// External force on each particle of a set: direction * value(t) [N].
+struct ParticleForce
+{
+  std::string name;
+  std::vector<std::int32_t> ids;
+  std::array<double, 3> direction{1.0, 0.0, 0.0};
+  History value;
+  /// Load through a rigid plate: the spheres' velocity components along
+  /// `direction` are made equal (their mass-weighted mean, so momentum is
+  /// kept) after every kick, so the set moves as one along the load and the
+  /// total force spreads as a stiff loading plate spreads it, whatever each
+  /// sphere's bonds (an equal share per sphere would push a loosely bonded
+  /// surface sphere far out). Other components stay free. The set must not
+  /// share spheres with a kinematic condition.
+  bool plate = false;
+  /// With `plate`: the plate may also rotate, as one loaded through a ball
+  /// joint: the velocity components along `direction` are made an affine
+  /// function of position, v_d = V + g . (x - c) with g normal to the load
+  /// (the rigid rotations' share of v_d), fitted by mass-weighted least
+  /// squares (so momentum and the moments about the centroid c are kept).
+  /// The plate then carries the load and no moment. Without it, the plate
+  /// only translates: it holds its own rotation, and so the end of a bent
+  /// bar (a plate of end spheres a centimetre deep in x clamps that layer's
+  /// rotation and takes ~2 % of the moment).
+  bool plate_rotates = false;
+};
+
+} // namespace dembridge::dem

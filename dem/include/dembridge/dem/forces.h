@@ -1,0 +1,72 @@
+#pragma once
+/// @file forces.h
+/// The DEM force loop (it only calls the laws of law.h), the energies stored
+/// and dissipated in links and contacts, and the linearised stiffness with
+/// the critical time step it bounds. OpenMP threads over spheres; results do
+/// not depend on the thread count.
+
+#include "dembridge/dem/assembly.h"
+#include "dembridge/dem/neighbours.h"
+
+#include <cstddef>
+#include <span>
+
+namespace dembridge::dem
+{
+
+/// Energy dissipated or stored in the force loop since the start [J].
+struct ForceCounters
+{
+  double friction = 0.0;   ///< sliding of contacts
+  double breakage = 0.0;   ///< elastic energy released when links break
+  /// Set to track cohesion_demand (costs a comparison per link and call).
+  bool track_cohesion = false;
+  /// The smallest cohesion C0 [Pa] at which no intact link's shear force
+  /// would have reached the Mohr-Coulomb cap in the calls so far: the largest
+  /// (|F_s| + F_n tan phi_i) / S_int (F_n > 0 in tension) over links and
+  /// calls. C0 enters nothing else, so a run with another C0 above it (all
+  /// else equal) is the same bit for bit: a test can be reused across C0.
+  double cohesion_demand = 0.0;
+};
+
+/// Computes forces and torques on all particles from the intact links and
+/// the contacts, using p.w as the angular velocity over the step (the
+/// spheres' rotations R = exp(omega dt), for the incremental shear). Updates
+/// link and contact history, breaks links (a link broken now hands over to a
+/// contact in the same call). Each link's force is computed once; each
+/// sphere gathers its links' forces in a fixed order, so the result is the
+/// same bit for bit whatever the number of OpenMP threads.
+/// (DemSolver keeps the force loop's scratch space between its steps; this
+/// function sizes its own at each call.)
+void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
+                    ForceCounters& c);
+
+/// Assemblies of fewer spheres than this run their step on one thread (the
+/// team's start and barriers would cost more than they save); default 2048.
+void set_min_spheres_per_thread_team(std::size_t n);
+std::size_t min_spheres_per_thread_team();
+
+/// Elastic energy stored in intact links and contacts [J].
+double elastic_energy(const Particles& p, const Links& l, const NeighbourList& nl,
+                      const Material& mat);
+
+/// Energy dissipated by tensile softening of all links [J].
+double softening_energy(const Particles& p, const Links& l, const Material& mat);
+
+/// Action of the linearised stiffness of the intact links about the current
+/// positions, f = K u (the links' weights included; contacts left out):
+/// u and f hold 6 values per particle, translations (n, 3) then rotations
+/// (n, 3) [m, rad -> N, N m]. The relative displacement of the link's contact
+/// point is (u_b - u_a) - (l_a theta_a + l_b theta_b) x n, its normal part
+/// resisted by K_n, its tangential part by K_s, as the law does for small
+/// increments. Used for the power-iteration estimates of the critical step.
+void stiffness_action(const Particles& p, const Links& l, std::span<const double> u,
+                      std::span<double> f);
+/// Upper bound of the largest eigenvalue of M^-1 K of the linearised
+/// assembly (its intact links, with their weights; translations and
+/// rotations), by block Gershgorin on M^-1/2 K M^-1/2; the critical step is
+/// 2/sqrt(bound). Contacts are left out: their stiffness is that of a link of
+/// the same pair.
+double critical_time_step(const Particles& p, const Links& l);
+
+} // namespace dembridge::dem

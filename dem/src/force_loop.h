@@ -1,0 +1,89 @@
+#pragma once
+// Internal to dem/: how the force loop shares its items between threads, and
+// the scratch space it keeps between calls.
+#include "dembridge/dem/forces.h"
+
+#include <climits>
+#include <cstdint>
+#include <span>
+#include <utility>
+#include <vector>
+
+namespace dembridge::dem
+{
+
+/// Values per item that a sweep prepares for a whole sphere at once.
+constexpr int prepared = 8;
+/// Doubles per sphere record of the force loop: centre (3), radius, the
+/// rotation over the step as a StepRotation (u (3), k): 64 bytes, one cache
+/// line, all that a link reads of its sphere b.
+constexpr int record = 8;
+
+/// How the items of the force loop (links, or neighbour pairs; sorted by
+/// (a, b)) are shared between T threads: thread t owns the spheres
+/// [n t / T, n (t + 1) / T) and computes the items whose a it owns, adding
+/// each item's force to both spheres. Items whose b belongs to a later
+/// thread ("cross" items) are computed first into a buffer, which their b
+/// sphere reads before its own items: every sphere then sums its items in the
+/// same order (b side in item order, then a side) whatever T is.
+struct SweepIndex
+{
+  std::vector<std::int32_t> first;      ///< items with a = i: [first[i], first[i + 1])
+  std::vector<std::size_t> bounds;      ///< spheres of thread t: [bounds[t], bounds[t + 1]) (T + 1)
+  std::vector<std::int32_t> cross_first; ///< first buffer slot of each thread (T + 1)
+  std::vector<std::int32_t> in_first, in; ///< slots of the cross items into sphere b (CSR)
+  std::vector<std::int32_t> cross_i, cross_k; ///< per slot: the cross item's sphere a and item
+  std::vector<double> out;              ///< per cross item: force on b (3), torque factor q (3)
+  std::vector<std::vector<double>> geometry; ///< per thread: branches of one sphere's items
+  int threads = 0;
+  /// @throws std::runtime_error if the items are not sorted or out of range
+  void build(std::size_t np, std::span<const std::int32_t> a, std::span<const std::int32_t> b,
+             int threads);
+  std::size_t bytes() const;
+};
+
+/// Scratch space and index structures of the force loop, kept between calls
+/// so that a step allocates nothing (once sized). Rebuilt by compute_forces
+/// when the links, the neighbour pairs or the thread count change.
+struct ForceScratch
+{
+  /// per sphere, 64-byte aligned: centre (3), radius, rotation over the step
+  /// (StepRotation: u (3), k), what a link reads of its spheres
+  std::vector<double> records;
+  SweepIndex links, pairs;
+  std::vector<double> pair_slip; ///< per pair: energy dissipated by friction in the step [J]
+  std::vector<std::vector<std::pair<std::int32_t, double>>> broken; ///< per thread
+  std::vector<std::pair<std::int32_t, double>> broken_all;
+  std::vector<std::int32_t> broken_ids;
+  std::vector<double> demand;    ///< per thread: ForceCounters::cohesion_demand
+  const std::int32_t* links_for = nullptr; ///< the link array the index was built for
+  std::size_t links_size = 0, pairs_version = SIZE_MAX;
+  std::size_t bytes() const;
+};
+
+/// compute_forces with the caller's scratch space (DemSolver's, kept
+/// between steps so that a step allocates nothing once sized).
+void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
+                    ForceCounters& c, ForceScratch& scratch);
+
+namespace impl
+{
+inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline Vec3 cross3(const double* a, const double* b)
+{
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+/// Equation [1] factors for contacts: K_n = E S / (R_a + R_b) * cn, K_s = K_n * cs.
+struct ContactFactors
+{
+  double cn, cs;
+};
+inline ContactFactors contact_factors(const Material& m)
+{
+  const auto k = link_stiffness(m.youngs_modulus, m.poisson_ratio, 1.0, 1.0, m.micro);
+  return {k.kn / m.youngs_modulus, k.ks / k.kn};
+}
+} // namespace impl
+
+} // namespace dembridge::dem

@@ -1,0 +1,88 @@
+// The linearised stiffness of the links (its action f = K u) and the
+// critical time step bounded from it.
+#include "force_loop.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+namespace dembridge::dem
+{
+using impl::cross3;
+using impl::dot3;
+
+void stiffness_action(const Particles& p, const Links& l, std::span<const double> u,
+                      std::span<double> f)
+{
+  const std::size_t n = p.size();
+  if (u.size() != 6 * n || f.size() != 6 * n)
+    throw std::runtime_error("stiffness_action: u and f need 6 values per particle");
+  std::fill(f.begin(), f.end(), 0.0);
+  const double* th = u.data() + 3 * n;
+  double* t = f.data() + 3 * n;
+  for (std::size_t k = 0; k < l.size(); ++k)
+  {
+    if (l.state[k] != LinkState::intact)
+      continue;
+    const std::int32_t i = l.a[k], j = l.b[k];
+    Vec3 nv{p.x[3 * j] - p.x[3 * i], p.x[3 * j + 1] - p.x[3 * i + 1], p.x[3 * j + 2] - p.x[3 * i + 2]};
+    const double D = std::sqrt(dot3(nv.data(), nv.data()));
+    for (double& c : nv)
+      c /= D;
+    const double la = D * p.r[i] / (p.r[i] + p.r[j]), lb = D - la;
+    const Vec3 rot{la * th[3 * i] + lb * th[3 * j], la * th[3 * i + 1] + lb * th[3 * j + 1],
+                   la * th[3 * i + 2] + lb * th[3 * j + 2]};
+    const Vec3 rxn = cross3(rot.data(), nv.data());
+    Vec3 d;
+    for (int c = 0; c < 3; ++c)
+      d[c] = u[3 * j + c] - u[3 * i + c] - rxn[c];
+    const double dn = dot3(d.data(), nv.data());
+    const double wk = l.weight.empty() ? 1.0 : l.weight[k];
+    const double fn = wk * l.kn[k] * dn; // tension positive
+    Vec3 fs;                              // shear force on b
+    for (int c = 0; c < 3; ++c)
+      fs[c] = -wk * l.ks[k] * (d[c] - dn * nv[c]);
+    const auto tq = shear_torques(nv, fs, la, lb);
+    for (int c = 0; c < 3; ++c)
+    {
+      // f = K u is the internal force: minus the force the link applies
+      const double fb = -fn * nv[c] + fs[c];
+      f[3 * j + c] -= fb;
+      f[3 * i + c] += fb;
+      t[3 * i + c] -= tq[0][c];
+      t[3 * j + c] -= tq[1][c];
+    }
+  }
+}
+
+double critical_time_step(const Particles& p, const Links& l)
+{
+  // Rows of M^-1/2 K M^-1/2 in 3 x 3 blocks: per link, translation blocks of
+  // norm <= max(kn, ks), translation-rotation blocks <= ks l, rotation blocks
+  // <= ks l_a l_b (and ks l_a^2 on the diagonal).
+  const std::size_t n = p.size();
+  std::vector<double> rt(n, 0.0), rr(n, 0.0);
+  for (std::size_t k = 0; k < l.size(); ++k)
+  {
+    if (l.state[k] != LinkState::intact)
+      continue;
+    const std::int32_t i = l.a[k], j = l.b[k];
+    const double wk = l.weight.empty() ? 1.0 : l.weight[k];
+    const double kt = wk * std::max(l.kn[k], l.ks[k]), ks = wk * l.ks[k];
+    const double la = l.d0[k] * p.r[i] / (p.r[i] + p.r[j]), lb = l.d0[k] - la;
+    const double mi = p.m[i], mj = p.m[j], Ii = p.inertia[i], Ij = p.inertia[j];
+    rt[i] += kt / mi + kt / std::sqrt(mi * mj) + ks * la / std::sqrt(mi * Ii) + ks * lb / std::sqrt(mi * Ij);
+    rt[j] += kt / mj + kt / std::sqrt(mi * mj) + ks * lb / std::sqrt(mj * Ij) + ks * la / std::sqrt(mj * Ii);
+    rr[i] += ks * la * la / Ii + ks * la * lb / std::sqrt(Ii * Ij) + ks * la / std::sqrt(Ii * mi) + ks * la / std::sqrt(Ii * mj);
+    rr[j] += ks * lb * lb / Ij + ks * la * lb / std::sqrt(Ii * Ij) + ks * lb / std::sqrt(Ij * mj) + ks * lb / std::sqrt(Ij * mi);
+  }
+  double lmax = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+    lmax = std::max({lmax, rt[i], rr[i]});
+  if (!(lmax > 0.0))
+    throw std::runtime_error("critical time step: the assembly has no intact link");
+  return 2.0 / std::sqrt(lmax);
+}
+
+} // namespace dembridge::dem
