@@ -226,6 +226,43 @@ TEST_CASE("coupled solver: bad set-ups are refused", "[bridge][coupled][errors]"
   CHECK_THROWS_WITH(bridge::CoupledSolver(*c.fe, c.p, c.l, c.mat, o), Contains("above the coupled estimate"));
 }
 
+TEST_CASE("coupled solver: it holds the caller's weighted state and gives it back", "[bridge][coupled]")
+{
+  // The coupler scales the caller's masses and inertias and fills the
+  // weights; while it lives a second coupler on the same arrays would scale
+  // them again, so it is refused. Destroyed, or failing in its constructor,
+  // the coupler leaves the arrays exactly as they were (bit for bit: the
+  // originals are kept, not divided back).
+  auto b = make_bar(shell::Cell::quadrilateral);
+  const std::vector<double> m0 = b.p.m, inertia0 = b.p.inertia;
+  auto given_back = [&]
+  {
+    CHECK(b.p.m == m0);
+    CHECK(b.p.inertia == inertia0);
+    CHECK(b.p.weight.empty());
+    CHECK(b.l.weight.empty());
+    const auto eta = b.fe->weight();
+    CHECK(std::all_of(eta.begin(), eta.end(), [](double e) { return e == 1.0; }));
+  };
+  bridge::CouplingOptions o;
+  o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
+  {
+    bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
+    CHECK(b.p.m != m0); // the overlap's and the shell side's spheres are lighter
+    CHECK(b.p.weight.size() == b.p.size());
+    CHECK(b.l.weight.size() == b.l.size());
+    CHECK_THROWS_WITH(bridge::CoupledSolver(*b.fe, b.p, b.l, b.mat, o), Contains("already carry energy weights"));
+    CHECK(b.p.weight.size() == b.p.size()); // the refusal changed nothing of the first's
+  }
+  given_back();
+  o.dt = 1.0; // above the coupled critical step: the constructor throws late
+  CHECK_THROWS_WITH(bridge::CoupledSolver(*b.fe, b.p, b.l, b.mat, o), Contains("above the coupled estimate"));
+  given_back();
+  o.dt = 0.0;
+  bridge::CoupledSolver again(*b.fe, b.p, b.l, b.mat, o);
+  CHECK(again.constrained() > 0);
+}
+
 TEST_CASE("solid coupling: a rigid motion of the solid moves the particles rigidly", "[bridge]")
 {
   // P1 tetrahedra and trilinear hexahedra reproduce affine fields exactly

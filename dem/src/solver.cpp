@@ -8,6 +8,7 @@
 #include <omp.h>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "force_loop.h"
 #include "threads.h"
@@ -136,21 +137,14 @@ void DemSolver::begin_step()
   _time.integration += omp_get_wtime() - t0;
 }
 
-void DemSolver::end_step()
+std::pair<double, double> DemSolver::drift()
 {
-  if (!_in_step)
-    throw std::runtime_error("DemSolver::end_step without begin_step");
-  _in_step = false;
-  const double t0 = omp_get_wtime();
   const std::size_t n = _p.size();
-  const double dt = _dt, t_new = _t + dt;
-  std::swap(_fext_old, _fext); // no allocation in the step loop
+  const double dt = _dt;
   const bool loaded = !_forces.empty();
-  if (loaded)
-    external(_forces, t_new, _fext);
   const std::vector<double>& fext_old = _fext_old;
-  // drift, with the work of external forces and of damping summed in fixed
-  // blocks (the same sums whatever the thread count)
+  // the work of external forces and of damping summed in fixed blocks (the
+  // same sums whatever the thread count)
   constexpr std::size_t block = 1024;
   const std::size_t nb = (n + block - 1) / block;
   _part.resize(2 * nb);
@@ -187,14 +181,13 @@ void DemSolver::end_step()
     w_ext += _part[2 * b];
     w_damp += _part[2 * b + 1];
   }
-  const double t1 = omp_get_wtime();
-  _nl.update(_p.x, _p.r, _l);
-  const double t2 = omp_get_wtime();
-  compute_forces(_p, _l, _nl, _mat, dt, _counters, *_scratch);
-  const double t3 = omp_get_wtime();
-  _time.neighbours += t2 - t1;
-  _time.forces += t3 - t2;
-  // reactions on held translations: m (v_new - v_old) = dt/2 (F_old + F_new) + dt R
+  return {w_ext, w_damp};
+}
+
+double DemSolver::held_reactions()
+{
+  // m (v_new - v_old) = dt/2 (F_old + F_new) + dt R
+  const double dt = _dt;
   double w_presc = 0.0;
   for (std::size_t q = 0; q < _held_dofs.size(); ++q)
   {
@@ -207,6 +200,47 @@ void DemSolver::end_step()
     w_presc += dt * vh * R;
     _reac[q] = R;
   }
+  return w_presc;
+}
+
+void DemSolver::check_finite() const
+{
+  // any NaN or infinity makes the sum non-finite, whatever the order
+  const std::size_t n = _p.size();
+  double check = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : check) num_threads(impl::threads_for(n))
+  for (std::size_t i = 0; i < 3 * n; ++i)
+    check += _p.x[i] + _p.v[i] + _p.w[i];
+  if (std::isfinite(check))
+    return;
+  std::size_t bad = 0;
+  while (bad < 3 * n && std::isfinite(_p.x[bad]) && std::isfinite(_p.v[bad]) && std::isfinite(_p.w[bad]))
+    ++bad;
+  std::ostringstream s;
+  s << "non-finite position or velocity of sphere " << bad / 3 << " at t = " << _t << " s (step "
+    << _steps << "): the run is unstable; reduce the time step";
+  throw std::runtime_error(s.str());
+}
+
+void DemSolver::end_step()
+{
+  if (!_in_step)
+    throw std::runtime_error("DemSolver::end_step without begin_step");
+  _in_step = false;
+  const double t0 = omp_get_wtime();
+  const double dt = _dt, t_new = _t + dt;
+  std::swap(_fext_old, _fext); // no allocation in the step loop
+  if (!_forces.empty())
+    external(_forces, t_new, _fext);
+  const auto [w_ext, w_damp] = drift();
+  const double t1 = omp_get_wtime();
+  _nl.update(_p.x, _p.r, _l);
+  const double t2 = omp_get_wtime();
+  compute_forces(_p, _l, _nl, _mat, dt, _counters, *_scratch);
+  const double t3 = omp_get_wtime();
+  _time.neighbours += t2 - t1;
+  _time.forces += t3 - t2;
+  const double w_presc = held_reactions();
   kick(0.5 * dt);
   tie_plates();
   for (const auto& m : _motions)
@@ -223,22 +257,7 @@ void DemSolver::end_step()
   _e.external_work += w_ext;
   _e.damping += w_damp;
   _e.prescribed_work += w_presc;
-
-  // any NaN or infinity makes the sum non-finite, whatever the order
-  double check = 0.0;
-#pragma omp parallel for schedule(static) reduction(+ : check) num_threads(impl::threads_for(n))
-  for (std::size_t i = 0; i < 3 * n; ++i)
-    check += _p.x[i] + _p.v[i] + _p.w[i];
-  if (!std::isfinite(check))
-  {
-    std::size_t bad = 0;
-    while (bad < 3 * n && std::isfinite(_p.x[bad]) && std::isfinite(_p.v[bad]) && std::isfinite(_p.w[bad]))
-      ++bad;
-    std::ostringstream s;
-    s << "non-finite position or velocity of sphere " << bad / 3 << " at t = " << _t
-      << " s (step " << _steps << "): the run is unstable; reduce the time step";
-    throw std::runtime_error(s.str());
-  }
+  check_finite();
   _time.integration += (t1 - t0) + (omp_get_wtime() - t3);
 }
 

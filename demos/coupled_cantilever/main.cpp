@@ -29,230 +29,327 @@
 #include <fstream>
 #include <iostream>
 #include <numbers>
+#include <memory>
 #include <numeric>
 
-int main(int argc, char** argv)
+namespace
 {
-  using namespace dembridge;
+using namespace dembridge;
+
+struct CoupledCantileverConfig
+{
   std::string load = "axial", fe_kind = "shell", cell = "quadrilateral", material_file, output, summary;
   double length = 0.2, width = 0.05, fe_length = 0.12, de_start = 0.08, mean_radius = 3e-3;
   double amplitude = 1e-6, periods = 2.0, safety = 0.8;
-  int nx = 12, ny = 5, frames = 20;
+  int nx = 12, ny = 5, nz = 5, frames = 20;
   unsigned seed = 1;
-  material_file = DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json";
-  CLI::App app{"Coupled shell / DE cantilever in free vibration", "coupled_cantilever"};
-  app.add_option("--load", load, "axial | bending (first cantilever mode shape)")->capture_default_str();
-  app.add_option("--fe", fe_kind, "shell | solid")->capture_default_str();
-  app.add_option("--cell", cell, "triangle | quadrilateral (shell); hexahedron | tetrahedron (solid)")
-      ->capture_default_str();
-  int nz = 5;
-  app.add_option("--nz", nz, "solid divisions through the thickness")->capture_default_str();
-  app.add_option("--length", length, "bar length [m]")->capture_default_str();
-  app.add_option("--width", width, "side of the square section = shell thickness [m]")->capture_default_str();
-  app.add_option("--fe-length", fe_length, "shell region: x in [0, fe-length] [m]")->capture_default_str();
-  app.add_option("--de-start", de_start, "DE region: x in [de-start, length] [m]")->capture_default_str();
-  app.add_option("--nx", nx, "shell divisions along x (over fe-length)")->capture_default_str();
-  app.add_option("--ny", ny, "shell divisions across")->capture_default_str();
-  app.add_option("--mean-radius", mean_radius, "mean sphere radius [m]")->capture_default_str();
-  app.add_option("--seed", seed, "packing seed")->capture_default_str();
-  app.add_option("--material", material_file, "DE parameter file (from calibrate)")->capture_default_str();
-  app.add_option("--amplitude", amplitude, "tip amplitude of the initial mode-shape velocity (tip speed = 2 pi f amplitude) [m]")->capture_default_str();
-  app.add_option("--periods", periods, "run length in periods of the all-shell model")->capture_default_str();
-  app.add_option("--safety-factor", safety, "fraction of the coupled critical time step, in (0, 1]")->capture_default_str();
-  app.add_option("--frames", frames, "output frames")->capture_default_str();
-  app.add_option("--output", output, "output folder; empty = none");
-  app.add_option("--summary", summary, "write key results as JSON to this file");
-  CLI11_PARSE(app, argc, argv);
+};
 
-  return demo::run_guarded(argc, argv, [&]
+/// The run in its phases: checks, the materials, the shell and the DE
+/// parts, the coupler, the all-shell reference, the clamp and the initial
+/// velocity, the output, the time loop and the summary. The coupler is
+/// declared after the model, particles and links it holds.
+class CoupledCantileverRun
+{
+public:
+  explicit CoupledCantileverRun(CoupledCantileverConfig c) : _c(std::move(c)) {}
+
+  nlohmann::json run()
   {
-    demo::echo_options(app);
-    demo::Stopwatch clock;
-    if (fe_kind != "shell" && fe_kind != "solid")
-      throw std::runtime_error("--fe " + fe_kind + ": allowed are shell, solid");
-    const bool solid = fe_kind == "solid";
-    if (solid && (cell == "quadrilateral" || cell == "triangle"))
-      cell = "hexahedron";
-    if (load != "axial" && load != "bending")
-      throw std::runtime_error("load '" + load + "': allowed are axial, bending");
-    if (!(de_start < fe_length && fe_length < length && de_start > 0.0))
-      throw std::runtime_error("need 0 < de-start < fe-length < length (the overlap is [de-start, fe-length])");
-    // DE side: material as identified; the shell takes the same E, nu, density
-    auto mf = dem::read_material(material_file);
-    dem::Material mat = mf.material;
-    mat.tensile = mat.cohesion = 1e12; // elastic vibration
-    shell::Material sm;
-    sm.youngs_modulus = mf.macroscopic.value("youngs_modulus_pa", mat.youngs_modulus);
-    sm.poisson_ratio = mf.macroscopic.value("poisson_ratio", mat.poisson_ratio);
-    sm.density = mat.density;
-    sm.thickness = width;
-    std::cout << "# shell material: E " << sm.youngs_modulus << " Pa, nu " << sm.poisson_ratio
-              << ", rho " << sm.density << " kg/m^3 (measured on the DE sample)\n";
+    check();
+    resolve_materials();
+    build_fe();
+    build_de();
+    couple();
+    reference();
+    clamp_and_start();
+    open_output();
+    march();
+    return summary();
+  }
 
-    auto mesh = solid ? shell::create_solid_box(MPI_COMM_WORLD, {fe_length, width, width},
-                                                {nx, ny, nz}, shell::parse_cell(cell),
-                                                shell::Placement::rotation_about(
-                                                    {1, 0, 0}, 0.0, {0.0, 0.0, -0.5 * width}))
-                      : shell::create_shell_rectangle(MPI_COMM_WORLD, fe_length, width, nx, ny,
-                                                      shell::parse_cell(cell));
-    shell::FEModel fe(mesh, sm);
+private:
+  // ---- set-up ---------------------------------------------------------------
+  void check()
+  {
+    if (_c.fe_kind != "shell" && _c.fe_kind != "solid")
+      throw std::runtime_error("--fe " + _c.fe_kind + ": allowed are shell, solid");
+    _solid = _c.fe_kind == "solid";
+    if (_solid && (_c.cell == "quadrilateral" || _c.cell == "triangle"))
+      _c.cell = "hexahedron";
+    if (_c.load != "axial" && _c.load != "bending")
+      throw std::runtime_error("load '" + _c.load + "': allowed are axial, bending");
+    if (!(_c.de_start < _c.fe_length && _c.fe_length < _c.length && _c.de_start > 0.0))
+      throw std::runtime_error("need 0 < de-start < fe-length < length (the overlap is [de-start, fe-length])");
+    _axial = _c.load == "axial";
+  }
+
+  /// DE side: the material as identified; the shell takes the same E, nu, density.
+  void resolve_materials()
+  {
+    _mf = dem::read_material(_c.material_file);
+    _mat = _mf.material;
+    _mat.tensile = _mat.cohesion = 1e12; // elastic vibration
+    _sm.youngs_modulus = _mf.macroscopic.value("youngs_modulus_pa", _mat.youngs_modulus);
+    _sm.poisson_ratio = _mf.macroscopic.value("poisson_ratio", _mat.poisson_ratio);
+    _sm.density = _mat.density;
+    _sm.thickness = _c.width;
+    std::cout << "# shell material: E " << _sm.youngs_modulus << " Pa, nu " << _sm.poisson_ratio
+              << ", rho " << _sm.density << " kg/m^3 (measured on the DE sample)\n";
+  }
+
+  void build_fe()
+  {
+    const double w = _c.width;
+    auto mesh = _solid ? shell::create_solid_box(MPI_COMM_WORLD, {_c.fe_length, w, w}, {_c.nx, _c.ny, _c.nz},
+                                                 shell::parse_cell(_c.cell),
+                                                 shell::Placement::rotation_about({1, 0, 0}, 0.0, {0.0, 0.0, -0.5 * w}))
+                       : shell::create_shell_rectangle(MPI_COMM_WORLD, _c.fe_length, w, _c.nx, _c.ny,
+                                                       shell::parse_cell(_c.cell));
+    _fe = std::make_unique<shell::FEModel>(mesh, _sm);
+  }
+
+  void build_de()
+  {
     dem::PackingOptions po;
-    po.mean_radius = mean_radius;
-    po.seed = seed;
-    const double h = width;
-    const auto region = dem::box_region({de_start, 0.0, -0.5 * h}, {length, width, 0.5 * h});
+    po.mean_radius = _c.mean_radius;
+    po.seed = _c.seed;
+    const double h = _c.width;
+    const auto region = dem::box_region({_c.de_start, 0.0, -0.5 * h}, {_c.length, _c.width, 0.5 * h});
     const auto pk = dem::generate_packing(region, po);
     double solid_volume = 0.0;
     for (double r : pk.r)
       solid_volume += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-    auto p = dem::make_particles(pk.x, pk.r, mat.density, solid_volume / region.volume);
-    auto links = dem::create_links(p, dem::lambda_for_bulk_links(region, p.x, p.r, mf.links_per_sphere), mat);
+    _p = dem::make_particles(pk.x, pk.r, _mat.density, solid_volume / region.volume);
+    _links = dem::create_links(_p, dem::lambda_for_bulk_links(region, _p.x, _p.r, _mf.links_per_sphere), _mat);
+  }
 
+  void couple()
+  {
     bridge::CouplingOptions o;
-    o.overlap = {{1.0, 0.0, 0.0}, fe_length, de_start};
-    o.safety = safety;
-    bridge::CoupledSolver s(fe, p, links, mat, o);
-    std::cout << p.size() << " spheres, " << links.size() << " links, " << fe.num_nodes()
+    o.overlap = {{1.0, 0.0, 0.0}, _c.fe_length, _c.de_start};
+    o.safety = _c.safety;
+    _s = std::make_unique<bridge::CoupledSolver>(*_fe, _p, _links, _mat, o);
+    const auto& s = *_s;
+    std::cout << _p.size() << " spheres, " << _links.size() << " links, " << _fe->num_nodes()
               << " shell nodes, " << s.constrained() << " constrained spheres ("
               << s.coupling().outside() << " placed by the nearest-element rule); dt " << s.dt()
-              << " s = safety x coupled critical " << s.dt_coupled() << " s (alone: FE " << s.dt_fe() << " s, DE " << s.dt_de() << " s)\n";
+              << " s = safety x coupled critical " << s.dt_coupled() << " s (alone: FE " << s.dt_fe()
+              << " s, DE " << s.dt_de() << " s)\n";
+  }
 
-    // reference: the all-shell cantilever of the same bar
+  /// The all-shell cantilever of the same bar (shell_cantilever's procedure).
+  void reference()
+  {
     demo::CantileverConfig ref;
-    ref.load = load;
-    ref.cell = cell;
-    ref.length = length;
-    ref.width = width;
-    ref.nx = static_cast<int>(std::round(nx * length / fe_length));
-    ref.ny = ny;
-    ref.nz = nz;
-    ref.material = sm;
+    ref.load = _c.load;
+    ref.cell = _c.cell;
+    ref.length = _c.length;
+    ref.width = _c.width;
+    ref.nx = static_cast<int>(std::round(_c.nx * _c.length / _c.fe_length));
+    ref.ny = _c.ny;
+    ref.nz = _c.nz;
+    ref.material = _sm;
     ref.quiet = true;
     ref.periods = 3.0;
     const auto fe_only = demo::run_cantilever(ref);
-    const double f_ref = fe_only["first_frequency_hz"].get<double>();
-    // clamp, initial shape (cantilever mode of the whole bar)
+    _f_ref = fe_only["first_frequency_hz"].get<double>();
+  }
+
+  double shape(double xx) const
+  {
+    return _axial ? std::sin(0.5 * std::numbers::pi * xx / _c.length)
+                  : shell::analytic::cantilever_mode_shape(xx, _c.length);
+  }
+  double slope(double xx) const { return shell::analytic::cantilever_mode_slope(xx, _c.length); }
+
+  /// Clamp at x = 0; initial velocity: the cantilever mode shape of the
+  /// whole bar times the all-shell model's circular frequency, so the tip
+  /// swings to about `amplitude` (a smooth velocity field, which excites
+  /// the particles' own high modes far less than an imposed displacement
+  /// field would).
+  void clamp_and_start()
+  {
+    shell::FEModel& fe = *_fe;
     const auto x = fe.node_coordinates();
     const int bs = fe.block_size();
     std::vector<int> all(bs);
     std::iota(all.begin(), all.end(), 0);
+    const double length = _c.length;
     const auto clamp = shell::node_dofs(
         shell::select_nodes(x, [&](const auto& q) { return q[0] < 1e-9 * length; }, "clamped end x = 0"),
         bs, all);
-    s.fe().add_motion({"clamp", clamp, shell::MotionKind::fixed, {}});
-    const bool axial = load == "axial";
-    auto shape = [&](double xx) {
-      return axial ? std::sin(0.5 * std::numbers::pi * xx / length)
-                   : shell::analytic::cantilever_mode_shape(xx, length);
-    };
-    auto slope = [&](double xx) { return shell::analytic::cantilever_mode_slope(xx, length); };
-    // initial velocity: the mode shape times the all-shell model's circular
-    // frequency, so the tip swings to about `amplitude` (a smooth velocity
-    // field, which excites the particles' own high modes far less than an
-    // imposed displacement field would)
-    const double vmax = 2.0 * std::numbers::pi * f_ref * amplitude;
+    _s->fe().add_motion({"clamp", clamp, shell::MotionKind::fixed, {}});
+    const double vmax = 2.0 * std::numbers::pi * _f_ref * _c.amplitude;
     std::vector<double> u(fe.num_dofs(), 0.0), v(fe.num_dofs(), 0.0);
     for (std::size_t k = 0; k < fe.num_nodes(); ++k)
     {
-      if (axial)
+      if (_axial)
         v[bs * k] = vmax * shape(x[3 * k]);
       else
       {
         v[bs * k + 2] = vmax * shape(x[3 * k]);
-        if (solid)
+        if (_solid)
           v[bs * k] = -vmax * slope(x[3 * k]) * x[3 * k + 2];
         else
           v[bs * k + 4] = -vmax * slope(x[3 * k]);
       }
     }
-    for (std::size_t i = 0; i < p.size(); ++i)
+    for (std::size_t i = 0; i < _p.size(); ++i)
     {
-      const double xi = p.x[3 * i], zi = p.x[3 * i + 2];
-      if (axial)
-        p.v[3 * i] = vmax * shape(xi);
+      const double xi = _p.x[3 * i], zi = _p.x[3 * i + 2];
+      if (_axial)
+        _p.v[3 * i] = vmax * shape(xi);
       else
       {
-        p.v[3 * i + 2] = vmax * shape(xi);
-        p.v[3 * i] = -vmax * slope(xi) * zi;
-        p.w[3 * i + 1] = -vmax * slope(xi);
+        _p.v[3 * i + 2] = vmax * shape(xi);
+        _p.v[3 * i] = -vmax * slope(xi) * zi;
+        _p.w[3 * i + 1] = -vmax * slope(xi);
       }
     }
-    s.start(u, v);
+    _s->start(u, v);
+    for (std::size_t i = 0; i < _p.size(); ++i)
+      if (_p.x0[3 * i] > _c.length - 2.0 * _c.mean_radius)
+        _tip.push_back(static_cast<std::int32_t>(i));
+  }
 
-    const auto nsteps = static_cast<std::int64_t>(std::ceil(periods / f_ref / s.dt()));
+  void open_output()
+  {
+    if (_c.output.empty())
+      return;
+    const std::filesystem::path dir(_c.output);
+    std::filesystem::create_directories(dir);
+    _shell_out = std::make_unique<shell::XdmfWriter>(*_fe, dir / "shell.xdmf");
+    _part_out = std::make_unique<dem::ParticleWriter>(dir / "particles.xdmf", _links, _p.size(), false);
+    _csv.open(dir / "history.csv");
+    _csv << "t_s,tip_m,fe_kinetic_j,fe_strain_j,de_kinetic_j,de_elastic_j,total_j,imbalance_j,residual\n";
+  }
 
-    std::vector<std::int32_t> tip;
-    for (std::size_t i = 0; i < p.size(); ++i)
-      if (p.x0[3 * i] > length - 2.0 * mean_radius)
-        tip.push_back(static_cast<std::int32_t>(i));
-    const int comp = axial ? 0 : 2;
-    auto tip_value = [&] {
-      double t = 0.0;
-      for (auto i : tip)
-        t += p.x[3 * i + comp] - p.x0[3 * i + comp];
-      return t / tip.size();
-    };
-    std::unique_ptr<shell::XdmfWriter> shell_out;
-    std::unique_ptr<dem::ParticleWriter> part_out;
-    std::ofstream csv;
-    if (!output.empty())
+  // ---- run ------------------------------------------------------------------
+  double tip_value() const
+  {
+    const int comp = _axial ? 0 : 2;
+    double t = 0.0;
+    for (auto i : _tip)
+      t += _p.x[3 * i + comp] - _p.x0[3 * i + comp];
+    return t / _tip.size();
+  }
+
+  void write_frame(std::int64_t k, double r)
+  {
+    const auto e = _s->energy();
+    _drift = std::max(_drift, std::abs(e.total() - _e0) / _e0);
+    if (_csv.is_open())
+      _csv << _ts.back() << ',' << _tips.back() << ',' << e.fe.kinetic << ',' << e.fe.strain << ','
+           << e.de.kinetic << ',' << e.de.elastic << ',' << e.total() << ',' << e.imbalance() << ',' << r
+           << '\n';
+    if (_shell_out)
     {
-      std::filesystem::create_directories(output);
-      shell_out = std::make_unique<shell::XdmfWriter>(fe, std::filesystem::path(output) / "shell.xdmf");
-      part_out = std::make_unique<dem::ParticleWriter>(std::filesystem::path(output) / "particles.xdmf",
-                                                       links, p.size(), false);
-      csv.open(std::filesystem::path(output) / "history.csv");
-      csv << "t_s,tip_m,fe_kinetic_j,fe_strain_j,de_kinetic_j,de_elastic_j,total_j,imbalance_j,residual\n";
+      _shell_out->write(_ts.back(), _s->fe().u(), _s->fe().v());
+      _part_out->write(_ts.back(), _p, _links);
     }
-    const std::int64_t every = std::max<std::int64_t>(1, nsteps / std::max(1, frames));
-    std::vector<double> ts{0.0}, tips{tip_value()};
-    const double e0 = s.energy().total();
-    double worst = 0.0, drift = 0.0;
+    if (k % (_every * std::max<std::int64_t>(1, _c.frames / 10)) == 0 || k == _nsteps)
+      std::printf("%10.4e %12.4e %13.5e %14.3e %16.3e\n", _ts.back(), _tips.back(), e.total(), e.imbalance(), r);
+  }
+
+  void march()
+  {
+    _nsteps = static_cast<std::int64_t>(std::ceil(_c.periods / _f_ref / _s->dt()));
+    _every = std::max<std::int64_t>(1, _nsteps / std::max(1, _c.frames));
+    _ts = {0.0};
+    _tips = {tip_value()};
+    _e0 = _s->energy().total();
     std::cout << "     t [s]      tip [m]   total E [J]  imbalance [J]   residual [m/s]\n";
-    for (std::int64_t k = 1; k <= nsteps; ++k)
+    for (std::int64_t k = 1; k <= _nsteps; ++k)
     {
-      const double r = s.step();
-      worst = std::max(worst, r);
-      ts.push_back(k * s.dt());
-      tips.push_back(tip_value());
-      if (k % every == 0 || k == nsteps)
-      {
-        const auto e = s.energy();
-        drift = std::max(drift, std::abs(e.total() - e0) / e0);
-        if (csv.is_open())
-          csv << ts.back() << ',' << tips.back() << ',' << e.fe.kinetic << ',' << e.fe.strain << ','
-              << e.de.kinetic << ',' << e.de.elastic << ',' << e.total() << ',' << e.imbalance()
-              << ',' << r << '\n';
-        if (shell_out)
-        {
-          shell_out->write(ts.back(), s.fe().u(), s.fe().v());
-          part_out->write(ts.back(), p, links);
-        }
-        if (k % (every * std::max<std::int64_t>(1, frames / 10)) == 0 || k == nsteps)
-          std::printf("%10.4e %12.4e %13.5e %14.3e %16.3e\n", ts.back(), tips.back(), e.total(),
-                      e.imbalance(), r);
-      }
+      const double r = _s->step();
+      _worst = std::max(_worst, r);
+      _ts.push_back(k * _s->dt());
+      _tips.push_back(tip_value());
+      if (k % _every == 0 || k == _nsteps)
+        write_frame(k, r);
     }
-    const double f = demo::crossing_frequency(ts, tips);
-    nlohmann::json out = {{"load", load},
-                          {"fe", fe_kind},
-                          {"particles", p.size()},
-                          {"shell_nodes", fe.num_nodes()},
-                          {"constrained_particles", s.constrained()},
-                          {"placed_by_nearest_rule", s.coupling().outside()},
-                          {"max_constraint_residual", worst},
-                          {"energy_drift", drift},
-                          {"first_frequency_hz", f},
-                          {"fe_only_frequency_hz", f_ref},
-                          {"relative_to_fe_only", f / f_ref - 1.0},
-                          {"dt_s", s.dt()},
-                          {"dt_coupled_s", s.dt_coupled()},
-                          {"dt_de_s", s.dt_de()},
-                          {"dt_fe_s", s.dt_fe()},
-                          {"steps", nsteps},
-                          {"wall_s", clock.seconds()}};
+  }
+
+  // ---- summary --------------------------------------------------------------
+  nlohmann::json summary() const
+  {
+    const auto& s = *_s;
+    const double f = demo::crossing_frequency(_ts, _tips);
+    return {{"load", _c.load},
+            {"fe", _c.fe_kind},
+            {"particles", _p.size()},
+            {"shell_nodes", _fe->num_nodes()},
+            {"constrained_particles", s.constrained()},
+            {"placed_by_nearest_rule", s.coupling().outside()},
+            {"max_constraint_residual", _worst},
+            {"energy_drift", _drift},
+            {"first_frequency_hz", f},
+            {"fe_only_frequency_hz", _f_ref},
+            {"relative_to_fe_only", f / _f_ref - 1.0},
+            {"dt_s", s.dt()},
+            {"dt_coupled_s", s.dt_coupled()},
+            {"dt_de_s", s.dt_de()},
+            {"dt_fe_s", s.dt_fe()},
+            {"steps", _nsteps},
+            {"wall_s", _clock.seconds()}};
+  }
+
+  // ---- state ----------------------------------------------------------------
+  CoupledCantileverConfig _c;
+  demo::Stopwatch _clock;
+  bool _solid = false, _axial = true;
+  dem::MaterialFile _mf;
+  dem::Material _mat;
+  shell::Material _sm;
+  std::unique_ptr<shell::FEModel> _fe;
+  dem::Particles _p;
+  dem::Links _links;
+  std::unique_ptr<bridge::CoupledSolver> _s; // after what it holds
+  double _f_ref = 0.0;
+  std::vector<std::int32_t> _tip;
+  std::unique_ptr<shell::XdmfWriter> _shell_out;
+  std::unique_ptr<dem::ParticleWriter> _part_out;
+  std::ofstream _csv;
+  std::int64_t _nsteps = 0, _every = 1;
+  std::vector<double> _ts, _tips;
+  double _e0 = 0.0, _worst = 0.0, _drift = 0.0;
+};
+} // namespace
+
+int main(int argc, char** argv)
+{
+  CoupledCantileverConfig c;
+  c.material_file = DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json";
+  CLI::App app{"Coupled shell / DE cantilever in free vibration", "coupled_cantilever"};
+  app.add_option("--load", c.load, "axial | bending (first cantilever mode shape)")->capture_default_str();
+  app.add_option("--fe", c.fe_kind, "shell | solid")->capture_default_str();
+  app.add_option("--cell", c.cell, "triangle | quadrilateral (shell); hexahedron | tetrahedron (solid)")
+      ->capture_default_str();
+  app.add_option("--nz", c.nz, "solid divisions through the thickness")->capture_default_str();
+  app.add_option("--length", c.length, "bar length [m]")->capture_default_str();
+  app.add_option("--width", c.width, "side of the square section = shell thickness [m]")->capture_default_str();
+  app.add_option("--fe-length", c.fe_length, "shell region: x in [0, fe-length] [m]")->capture_default_str();
+  app.add_option("--de-start", c.de_start, "DE region: x in [de-start, length] [m]")->capture_default_str();
+  app.add_option("--nx", c.nx, "shell divisions along x (over fe-length)")->capture_default_str();
+  app.add_option("--ny", c.ny, "shell divisions across")->capture_default_str();
+  app.add_option("--mean-radius", c.mean_radius, "mean sphere radius [m]")->capture_default_str();
+  app.add_option("--seed", c.seed, "packing seed")->capture_default_str();
+  app.add_option("--material", c.material_file, "DE parameter file (from calibrate)")->capture_default_str();
+  app.add_option("--amplitude", c.amplitude, "tip amplitude of the initial mode-shape velocity (tip speed = 2 pi f amplitude) [m]")->capture_default_str();
+  app.add_option("--periods", c.periods, "run length in periods of the all-shell model")->capture_default_str();
+  app.add_option("--safety-factor", c.safety, "fraction of the coupled critical time step, in (0, 1]")->capture_default_str();
+  app.add_option("--frames", c.frames, "output frames")->capture_default_str();
+  app.add_option("--output", c.output, "output folder; empty = none");
+  app.add_option("--summary", c.summary, "write key results as JSON to this file");
+  CLI11_PARSE(app, argc, argv);
+
+  return demo::run_guarded(argc, argv, [&]
+  {
+    demo::echo_options(app);
+    const nlohmann::json out = CoupledCantileverRun(c).run();
     std::cout << out.dump(2) << std::endl;
-    if (!summary.empty())
-      demo::write_json(summary, out);
+    if (!c.summary.empty())
+      demo::write_json(c.summary, out);
   });
 }

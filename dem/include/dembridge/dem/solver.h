@@ -15,6 +15,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace dembridge::dem
@@ -95,6 +96,13 @@ public:
 
 private:
   void kick(double h);
+  /// x += dt v(n+1/2) (by multiples of the position quantum); returns the
+  /// work of the external forces and of the damping over the step.
+  std::pair<double, double> drift();
+  /// The reactions on held translations at n+1; returns their work.
+  double held_reactions();
+  /// @throws std::runtime_error naming the sphere if a value is not finite.
+  void check_finite() const;
   void update_held();
   void tie_plates(); // loading plates: one velocity along the load (and rotations, if free)
   Particles& _p;
