@@ -1,5 +1,6 @@
 # Runs CMD with ARGS ('|'-separated) writing the JSON summary SUMMARY, then
-# checks |KEY| < BOUND for each "KEY<BOUND" in CHECKS ('|'-separated).
+# checks |KEY| < BOUND for each "KEY<BOUND" and |KEY| > BOUND for each
+# "KEY>BOUND" in CHECKS ('|'-separated).
 string(REPLACE "|" ";" args "${ARGS}")
 execute_process(COMMAND ${CMD} ${args} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
@@ -8,15 +9,16 @@ endif()
 file(READ "${SUMMARY}" json)
 string(REPLACE "|" ";" checks "${CHECKS}")
 foreach(c ${checks})
-  string(REGEX MATCH "^([a-z_0-9]+)<(.+)$" m "${c}")
+  string(REGEX MATCH "^([a-z_0-9]+)([<>])(.+)$" m "${c}")
   set(key "${CMAKE_MATCH_1}")
-  set(bound "${CMAKE_MATCH_2}")
+  set(op "${CMAKE_MATCH_2}")
+  set(bound "${CMAKE_MATCH_3}")
   string(JSON value GET "${json}" "${key}")
   # |value| < bound, compared as numbers by a tiny expression in math(EXPR)-free form
-  execute_process(COMMAND /usr/bin/python3 -c "import sys; sys.exit(0 if abs(float('${value}')) < float('${bound}') else 1)"
+  execute_process(COMMAND /usr/bin/python3 -c "import sys; sys.exit(0 if abs(float('${value}')) ${op} float('${bound}') else 1)"
                   RESULT_VARIABLE ok)
   if(NOT ok EQUAL 0)
-    message(FATAL_ERROR "${key} = ${value}: |value| must be below ${bound}")
+    message(FATAL_ERROR "${key} = ${value}: |value| must be ${op} ${bound}")
   endif()
-  message(STATUS "${key} = ${value} (< ${bound})")
+  message(STATUS "${key} = ${value} (${op} ${bound})")
 endforeach()

@@ -50,7 +50,7 @@ TEST_CASE("bar, reduced: static shapes against beam theory, dynamic frequencies 
                  << " m, beam theory " << r.at("reference_end_displacement_m") << " m, error " << err);
       // Beam theory over the span from the support to the load (for a set of
       // spheres: the mean x of their centres), the end loaded through a
-      // rigid plate (hinged at its centroid in bending). FE: the issue's 2 %
+      // rigid plate (hinged at its centroid in bending). FE: the required 2 %
       // (measured -0.2 % tension, -0.6 % bending: the clamp holds the
       // Poisson contraction).
       // Spheres: the skins' links are stiffened to the bulk's links per
@@ -85,7 +85,7 @@ TEST_CASE("bar, reduced: static shapes against beam theory, dynamic frequencies 
       CHECK(r.at("probe_0_75").at("amplitude_m").get<double>() > 0.0);
     }
     INFO(load << ": first frequency FE " << f[0] << " Hz, coupled " << f[1] << " Hz, DE " << f[2] << " Hz");
-    // the three discretisations of the same concrete: the issue's 2 %
+    // the three discretisations of the same concrete: the required 2 %
     // (measured up to 1.3 %: tension FE 1078 Hz, coupled 1081, DE 1092;
     // bending 193.2, 194.0, 194.9)
     CHECK(std::abs(f[1] / f[2] - 1.0) < 0.02);

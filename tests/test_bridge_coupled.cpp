@@ -109,7 +109,7 @@ TEST_CASE("coupled bar: constraint after every step, energy kept", "[bridge][cou
     // the constraint holds to the solver's round-off (velocities ~ 1e-3 m/s)
     CHECK(worst < 1e-10);
     // total energy kept: the corrections only remove what the two
-    // discretisations disagree on (bounded here by 0.5 %, the issue's bound
+    // discretisations disagree on (bounded here by 0.5 %, the required bound
     // for 20 periods)
     CHECK(drift < 5e-3);
     // the two sides' budgets close together (each carries the multipliers'
@@ -349,7 +349,7 @@ TEST_CASE("coupled patch test: a uniform velocity is carried unchanged", "[bridg
   // What is left is the corrections' round-off, 5.3e-14 m/s on every
   // particle and on the shell nodes (1.8e-13 of V): G_FE sums node
   // velocities with weights adding up to 1 within eps.
-  // Bound: the issue's 1e-10 of V, for every particle and node.
+  // Bound: the required 1e-10 of V, for every particle and node.
   double de = 0.0, fe = 0.0, spin = 0.0;
   for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
     for (int d = 0; d < 3; ++d)
@@ -411,12 +411,12 @@ TEST_CASE("coupled patch test: a rigid rotation is carried by both sides", "[bri
   // its force K l (omega t)^2 / 2 changes velocities by about
   // (K / m) l (omega t)^2 t / 2 = 2.4e-7 m/s here (K / m <= 5e11 1/s^2,
   // l = 6 mm, |omega| t = 3.9e-6 rad over 10 steps), 1e-5 of the motion:
-  // the issue's 1e-10 cannot hold through time stepping for a linear shell
+  // the required 1e-10 cannot hold through time stepping for a linear shell
   // and a finite-rotation DE. So the test checks that the deviation is below
   // that estimate and second order: halving omega divides it by about 4. A
   // wrong rotation convention or interpolation would show at first order,
   // ~1e-2 m/s. Before any step, the multiplier correction of start() must
-  // leave both rigid fields as they are to the issue's 1e-10 (kinematic
+  // leave both rigid fields as they are to the required 1e-10 (kinematic
   // patch test: nothing to correct).
   auto b = make_bar(shell::Cell::quadrilateral);
   const std::vector<double> x0 = b.p.x;
@@ -484,7 +484,7 @@ TEST_CASE("coupled patch test: a rigid rotation is carried by both sides", "[bri
     };
     // start() applies the multiplier correction: the two sides' rigid
     // fields already satisfy the constraint, so it must change nothing (the
-    // kinematic patch test, the issue's 1e-10 of the motion)
+    // kinematic patch test, the required 1e-10 of the motion)
     s.start(u, v);
     const Off at_start = measure();
     for (int k = 0; k < 10; ++k)
@@ -511,7 +511,7 @@ TEST_CASE("coupled patch test: a rigid rotation is carried by both sides", "[bri
 TEST_CASE("coupled bar: energy kept over 20 periods", "[bridge][coupled]")
 {
   // undamped axial free vibration of the clamped coupled bar, 20 periods of
-  // the first axial mode: total energy within 0.5 % (the issue's bound)
+  // the first axial mode: total energy within 0.5 % (the required bound)
   auto b = make_bar(shell::Cell::quadrilateral);
   bridge::CouplingOptions o;
   o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
@@ -548,7 +548,7 @@ std::pair<double, double> pulse(bool fe_to_de)
   // (8 cm: about 13 mean DE diameters and 16 shell elements). A right-going
   // longitudinal pulse (cosine bell, 8 cm long) starts in the FE-only
   // region. Once it has crossed, the energy left in the FE-only region is
-  // the reflected part: below 5 % of the pulse's energy (the issue's bound;
+  // the reflected part: below 5 % of the pulse's energy (the required bound;
   // measured 2.5 %). A 4 cm overlap (7 diameters) reflects 9.7 %: the
   // overlap must span many DE diameters.
   const double w = 0.05, h = 0.05, L = 0.5, xfe = 0.3, xde = 0.22;
@@ -665,7 +665,7 @@ std::pair<double, double> pulse(bool fe_to_de)
 TEST_CASE("wave transmission: a pulse crosses the overlap with little reflection",
           "[bridge][coupled]")
 {
-  // reflected energy below 5 % (the issue's bound), most of it arrived.
+  // reflected energy below 5 % (the required bound), most of it arrived.
   // Both ways: from the shell into the DE (measured: 2.5 % reflected, 83 %
   // arrived) and from the DE's free end into the shell (2.1 % reflected as a
   // wave, 83 % arrived; the DE-only region also keeps ~11 % as the

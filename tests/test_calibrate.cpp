@@ -1,4 +1,4 @@
-// Identification of the DE parameters (issue "Identification"),
+// Identification of the DE parameters,
 // on a small sample (a 5 x 10 cm cylinder of about 400 spheres; the default
 // sample, 15 x 30 cm, has about 10,700).
 #include "dembridge/dem/material_file.h"
@@ -25,7 +25,7 @@ demo::IdentifyConfig small()
 
 TEST_CASE("elastic identification reaches E within 2 % and nu within 0.02", "[calibrate]")
 {
-  // the issue's accuracy; the bisection stops at 0.5 % / 0.005
+  // the required accuracy; the bisection stops at 0.5 % / 0.005
   for (double nu : {0.15, 0.2})
   {
     auto c = small();
@@ -51,11 +51,11 @@ TEST_CASE("full identification: strengths within 5 %, file read back by the demo
   const auto r = demo::identify(c);
   INFO(r.achieved.dump());
   INFO(r.checks.dump());
-  // quasi-static: halving the strain rate moves nothing by 1 % (the issue's
+  // quasi-static: halving the strain rate moves nothing by 1 % (the required
   // check; measured < 0.6 %)
   for (const char* k : {"youngs_modulus_pa", "poisson_ratio", "tensile_strength_pa", "compressive_strength_pa"})
     CHECK(std::abs(r.checks["half_rate"]["difference"][k].get<double>()) < 0.01);
-  // a second packing of the same settings: the issue's accuracy against the
+  // a second packing of the same settings: the required accuracy against the
   // targets (E 2 %, nu 0.02, strengths 5 %)
   CHECK(r.checks["second_packing"]["within"].get<bool>());
   // a sample of twice the volume: not within them at this size (E +3 %,
@@ -116,7 +116,7 @@ TEST_CASE("fracture energy identified through zeta, strengths kept", "[calibrate
   CHECK(std::abs(a["fracture_energy_j_m2"].get<double>() / 60.0 - 1.0) < 0.07);
   CHECK(r.file.material.zeta != 10.0);
   CHECK(r.fracture["separated"].get<bool>());
-  // the strengths still within the issue's 5 %
+  // the strengths still within the required 5 %
   CHECK(std::abs(a["tensile_strength_pa"].get<double>() / 3.0e6 - 1.0) < 0.05);
   CHECK(std::abs(a["compressive_strength_pa"].get<double>() / 16.5e6 - 1.0) < 0.05);
   CHECK(std::abs(a["youngs_modulus_pa"].get<double>() / 30e9 - 1.0) < 0.02);

@@ -370,7 +370,7 @@ TEST_CASE("undamped elastic assembly: no energy drift over 10,000 steps", "[dem]
   // At the default step (0.9 x the critical one) velocity Verlet conserves a
   // shadow energy; kinetic + elastic oscillates about it by O((w dt)^2)
   // without drifting. Drift (change of the energy averaged over the first
-  // and last 1000 steps) below 1e-4 of the initial energy (the issue's
+  // and last 1000 steps) below 1e-4 of the initial energy (the required
   // bound; measured ~1.5e-6). The oscillation is the scheme's: halving dt
   // divides it by 4 (checked within 3.2-4.8).
   const auto a = run_energy(0.9, 10000);

@@ -64,7 +64,7 @@ TEST_CASE("packing: dense in the bulk, no overlap, faces filled", "[dem][packing
     CHECK(r <= rmax * (1 + 1e-12));
     CHECK(r >= rmin * (1 - 0.02));
   }
-  // overlap and boundary penetration at most 1e-3 Rmin (the issue's bound)
+  // overlap and boundary penetration at most 1e-3 Rmin (the required bound)
   const auto [ov, pen] = worst(p, g);
   CHECK(ov <= 1e-3 * rmin);
   CHECK(pen <= 1e-3 * rmin);
@@ -97,7 +97,7 @@ TEST_CASE("packing: isotropic fabric and about 12 links per sphere", "[dem][pack
   CHECK(mean < 12.1);
   // fabric tensor F = <n n> of the links, away from the walls (the wall
   // layer is anisotropic by construction): eigenvalues within 10 % of each
-  // other (the issue's bound; an isotropic set gives 1/3 each)
+  // other (the required bound; an isotropic set gives 1/3 each)
   Eigen::Matrix3d F = Eigen::Matrix3d::Zero();
   int count = 0;
   for (std::size_t k = 0; k < links.size(); ++k)

@@ -43,13 +43,6 @@ std::pair<std::array<hsize_t, 2>, bool> inspect(hid_t file, const std::string& p
   return {dims, finite};
 }
 
-std::string first_child(hid_t file, const std::string& path)
-{
-  char name[256];
-  H5Lget_name_by_idx(file, path.c_str(), H5_INDEX_NAME, H5_ITER_INC, 0, name, sizeof(name),
-                     H5P_DEFAULT);
-  return path + "/" + name;
-}
 } // namespace
 
 TEST_CASE("cantilever output: XDMF/HDF5 fields and time steps, CSV history", "[io]")
@@ -74,28 +67,40 @@ TEST_CASE("cantilever output: XDMF/HDF5 fields and time steps, CSV history", "[i
   REQUIRE(f >= 0);
   const std::vector<std::string> fields
       = {"displacement", "velocity", "rotation", "angular_velocity", "normal"};
-  for (const auto& field : fields)
-  {
-    INFO(field);
-    CHECK(count_children(f, "/Function/" + field) == frames);
-    const auto [dims, finite] = inspect(f, first_child(f, "/Function/" + field));
-    CHECK(dims[0] == nodes);
-    CHECK(dims[1] == 3);
-    CHECK(finite);
-  }
-  const auto [gdims, gfinite] = inspect(f, "/Mesh/mesh/geometry");
+  CHECK(count_children(f, "/") == frames + 1); // /mesh and /frame_k
+  for (long k = 0; k < frames; ++k)
+    for (const auto& field : fields)
+    {
+      INFO(field << " at frame " << k);
+      const auto [dims, finite] = inspect(f, field == "normal" ? "/mesh/normal" : "/frame_" + std::to_string(k) + "/" + field);
+      CHECK(dims[0] == nodes);
+      CHECK(dims[1] == 3);
+      CHECK(finite);
+    }
+  const auto [gdims, gfinite] = inspect(f, "/mesh/geometry");
   CHECK(gdims[0] == nodes);
   CHECK(gdims[1] == 3);
   H5Fclose(f);
 
-  // The XDMF has one grid per field and time step.
+  // The XDMF has one grid per time step, carrying every field, and declares
+  // every float 64-bit.
   std::ifstream xdmf(dir / "cantilever.xdmf");
   std::string text((std::istreambuf_iterator<char>(xdmf)), std::istreambuf_iterator<char>());
   std::size_t times = 0;
   for (std::size_t p = text.find("<Time Value="); p != std::string::npos;
        p = text.find("<Time Value=", p + 1))
     ++times;
-  CHECK(times == fields.size() * static_cast<std::size_t>(frames));
+  CHECK(times == static_cast<std::size_t>(frames));
+  std::size_t floats = 0, doubles = 0;
+  for (std::size_t p = text.find("NumberType=\"Float\""); p != std::string::npos;
+       p = text.find("NumberType=\"Float\"", p + 1))
+  {
+    ++floats;
+    const std::string tag = "NumberType=\"Float\" Precision=\"8\"";
+    doubles += text.compare(p, tag.size(), tag) == 0;
+  }
+  CHECK(floats == static_cast<std::size_t>(frames) * (1 + fields.size()));
+  CHECK(doubles == floats);
 
   // CSV: header + one row per frame
   std::ifstream csv(dir / "history.csv");

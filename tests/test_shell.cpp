@@ -1,4 +1,4 @@
-// Shell and solid cantilevers against beam theory (issue "Foundation").
+// Shell and solid cantilevers against beam theory.
 // Material of the paper's bar unless said: E = 30 GPa, nu = 0.2,
 // rho = 2400 kg/m^3, 0.85 m x 0.25 m, h = 0.25 m.
 #include "cantilever.h"
@@ -47,7 +47,7 @@ TEST_CASE("beam references reproduce the published values", "[analytic]")
 
 TEST_CASE("axial free vibration: first frequency within 1 % of c/(4L)", "[shell]")
 {
-  // 1 %: the issue's bound. With free lateral edges the membrane acts with E;
+  // 1 %: the required bound. With free lateral edges the membrane acts with E;
   // lateral inertia and the O(h^2) discretisation error are ~0.1-0.3 %.
   for (std::string cell : {"quadrilateral", "triangle"})
   {
@@ -63,7 +63,7 @@ TEST_CASE("axial free vibration: first frequency within 1 % of c/(4L)", "[shell]
 
 TEST_CASE("bending free vibration: first frequency within 1.5 % of Timoshenko", "[shell]")
 {
-  // 1.5 %: the issue's bound; a plate strip of width = thickness differs from
+  // 1.5 %: the required bound; a plate strip of width = thickness differs from
   // a Timoshenko beam by plate (nu) effects of a fraction of a percent.
   for (std::string cell : {"quadrilateral", "triangle"})
   {
@@ -85,7 +85,7 @@ TEST_CASE("static tip load: explicit damped run and direct solve vs Timoshenko",
     auto r = demo::run_cantilever(config("static-tip", cell));
     INFO(cell << ": " << r.dump());
     const double ref = r["reference_deflection_m"];
-    // 1.5 %: the issue's bound (plate effects and clamp: ~0.5 %).
+    // 1.5 %: the required bound (plate effects and clamp: ~0.5 %).
     CHECK(std::abs(r["direct_tip_deflection_m"].get<double>() / ref - 1.0) < 0.015);
     CHECK(std::abs(r["explicit_tip_deflection_m"].get<double>() / ref - 1.0) < 0.015);
     // With damping 2 omega_1 over 16/omega_1 every mode has decayed by
@@ -101,7 +101,7 @@ TEST_CASE("thin shells do not lock: L/h = 340 within 3 % of Kirchhoff", "[shell]
 {
   // nu = 0 makes the Kirchhoff plate strip exactly an Euler-Bernoulli beam,
   // so the reference is P L^3 / (3 E I) without plate-width effects; 3 % is
-  // the issue's bound (a locking element is off by -76 % to -97 %).
+  // the required bound (a locking element is off by -76 % to -97 %).
   for (std::string cell : {"quadrilateral", "triangle"})
   {
     auto c = config("static-tip", cell);
@@ -152,7 +152,7 @@ TEST_CASE("undamped free vibration conserves energy over 20 periods", "[shell]")
   // Start from the static tip-load shape (all modes present in their static
   // proportions). Velocity Verlet conserves a shadow energy; the error in
   // kinetic + strain stays bounded by O((w dt)^2) of the energy in high modes.
-  // Bound 1e-3 of the initial energy (the issue's).
+  // Bound 1e-3 of the initial energy (the required bound).
   auto c = config("bending", "quadrilateral");
   c.nx = 34;
   c.ny = 10;
@@ -167,7 +167,7 @@ TEST_CASE("undamped free vibration conserves energy over 20 periods", "[shell]")
 TEST_CASE("hexahedral solid cantilever: axial within 1 %, bending within 2.5 %", "[solid]")
 {
   // Trilinear hexahedra, 8 through the depth: bending error from parasitic
-  // shear ~ 1/n^2 of the bending energy; 2.5 % is the issue's bound. The
+  // shear ~ 1/n^2 of the bending energy; 2.5 % is the required bound. The
   // clamped face also holds the Poisson contraction (slightly stiffer).
   auto a = config("axial", "hexahedron");
   a.nx = 34;

@@ -13,6 +13,7 @@
 //   OMP_NUM_THREADS=1 build/bin/dem_throughput --packing my_spheres.txt
 #include "dembridge/dem/packing.h"
 #include "dembridge/dem/solver.h"
+#include "options.h"
 #include "support.h"
 
 #include <CLI/CLI.hpp>
@@ -37,19 +38,20 @@ int main(int argc, char** argv)
   int steps = 200;
   std::string packing_file, output, summary;
   CLI::App app{"DEM step throughput on a bonded cube", "dem_throughput"};
-  app.add_option("--particles", sizes, "numbers of spheres (one run each)")->capture_default_str();
-  app.add_option("--packing", packing_file, "use this 'x y z r' packing [m] instead of generating");
+  using demo::Allowed;
+  demo::add_integers(app, "--particles", sizes, "numbers of spheres (one run each)", Allowed::closed(8, 1e8));
+  demo::add_input_file(app, "--packing", packing_file, "use this 'x y z r' packing [m] instead of generating");
   std::string save_packing;
-  app.add_option("--save-packing", save_packing,
-                 "write the generated packing of the last size to this 'x y z r' file");
-  app.add_option("--steps", steps, "timed steps per block")->capture_default_str();
+  demo::add_output_file(app, "--save-packing", save_packing,
+                        "write the generated packing of the last size to this 'x y z r' file");
+  demo::add_integer(app, "--steps", steps, "timed steps per block", Allowed::closed(1, 1e7));
   int repeat = 3;
-  app.add_option("--repeat", repeat, "timed blocks per size; the fastest is reported (a shared "
-                                     "machine's noise only ever slows a block down)")
-      ->capture_default_str();
-  app.add_option("--output", output, "output folder (unused: only the summary is written)");
-  app.add_option("--summary", summary, "JSON file with the figures");
-  CLI11_PARSE(app, argc, argv);
+  demo::add_integer(app, "--repeat", repeat, "timed blocks per size; the fastest is reported (a shared "
+                                             "machine's noise only ever slows a block down)", Allowed::closed(1, 1000));
+  demo::add_output_dir(app, "--output", output, "output folder (unused: only the summary is written)");
+  demo::add_output_file(app, "--summary", summary, "JSON file with the figures");
+  if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
+    return rc;
 
   return demo::run_guarded(argc, argv, [&]
   {
@@ -151,6 +153,6 @@ int main(int argc, char** argv)
     out["cases"] = cases;
     out["peak_rss_bytes"] = demo::peak_rss_bytes();
     if (!summary.empty())
-      demo::write_json(summary, out);
-  });
+      demo::write_summary(summary, out);
+  }, summary);
 }

@@ -11,6 +11,7 @@
 #include "dembridge/shell/explicit.h"
 #include "dembridge/shell/mesh.h"
 #include "dembridge/shell/model.h"
+#include "options.h"
 #include "support.h"
 
 #include <CLI/CLI.hpp>
@@ -25,12 +26,14 @@ int main(int argc, char** argv)
   int steps = 1000;
   std::string cell = "quadrilateral", output, summary;
   CLI::App app{"Cost of an explicit shell step vs a bare MatMult", "shell_step"};
-  app.add_option("--sizes", sizes, "approximate numbers of cells")->capture_default_str();
-  app.add_option("--steps", steps, "timed steps per size")->capture_default_str();
-  app.add_option("--cell", cell, "quadrilateral | triangle")->capture_default_str();
-  app.add_option("--output", output, "output folder (unused: nothing but the summary is written)");
-  app.add_option("--summary", summary, "JSON file with the figures");
-  CLI11_PARSE(app, argc, argv);
+  using demo::Allowed;
+  demo::add_integers(app, "--sizes", sizes, "approximate numbers of cells", Allowed::closed(1, 1e7));
+  demo::add_integer(app, "--steps", steps, "timed steps per size", Allowed::closed(1, 1e7));
+  demo::add_choice(app, "--cell", cell, "shell cells", "quadrilateral | triangle");
+  demo::add_output_dir(app, "--output", output, "output folder (unused: nothing but the summary is written)");
+  demo::add_output_file(app, "--summary", summary, "JSON file with the figures");
+  if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
+    return rc;
 
   return demo::run_guarded(argc, argv, [&]
   {
@@ -94,6 +97,6 @@ int main(int argc, char** argv)
     out["steps"] = steps;
     out["peak_rss_bytes"] = demo::peak_rss_bytes();
     if (!summary.empty())
-      demo::write_json(summary, out);
-  });
+      demo::write_summary(summary, out);
+  }, summary);
 }

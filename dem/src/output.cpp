@@ -39,6 +39,11 @@ ParticleWriter::ParticleWriter(const std::filesystem::path& file, const Links& l
   _file = H5Fcreate(_h5.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   if (_file < 0)
     throw std::runtime_error("cannot create HDF5 file '" + _h5.string() + "'");
+  // the vertex cells' index list, 0 .. n - 1 (the Polyvertex topology's)
+  std::vector<std::int32_t> vertices(particles);
+  for (std::size_t i = 0; i < particles; ++i)
+    vertices[i] = static_cast<std::int32_t>(i);
+  write_dataset(_file, "/vertices", vertices.data(), H5T_NATIVE_INT32, {particles, 1});
   _initial_links.assign(particles, 0);
   for (std::size_t k = 0; k < links.size(); ++k)
   {
@@ -109,7 +114,10 @@ void ParticleWriter::write_xdmf() const
   for (std::size_t k = 0; k < _times.size(); ++k)
   {
     x << " <Grid Name=\"particles\" GridType=\"Uniform\">\n  <Time Value=\"" << _times[k] << "\"/>\n"
-      << "  <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << _n << "\"/>\n"
+      << "  <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << _n
+      << "\" NodesPerElement=\"1\">\n   <DataItem Dimensions=\"" << _n
+      << " 1\" Format=\"HDF\" NumberType=\"Int\" Precision=\"4\">" << h5 << ":/vertices</DataItem>\n"
+      << "  </Topology>\n"
       << "  <Geometry GeometryType=\"XYZ\">\n   <DataItem Dimensions=\"" << _n
       << " 3\" Format=\"HDF\" NumberType=\"Float\" Precision=\"8\">" << h5 << ":/frame_" << k
       << "/position</DataItem>\n  </Geometry>\n";

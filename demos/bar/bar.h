@@ -62,7 +62,7 @@ struct BarConfig
 /// @throws std::runtime_error naming the value and what is allowed.
 void check_config(const BarConfig& c);
 
-/// Runs one case; returns the summary (keys of the validation issue: model,
+/// Runs one case; returns the summary (keys: model,
 /// load, regime, particles, shell_nodes, probe_0_75 and probe_0_4351 with
 /// first_frequency_hz and amplitude_m (dynamic), static_end_displacement_m
 /// and reference_end_displacement_m (static), wall_s, steps, and more).

@@ -12,6 +12,7 @@
 //   build/bin/bar --compare --output out/bar_compare --summary out/bar_compare.json
 //   build/bin/bar --compare --seeds 5 --output out/bar_seeds
 #include "bar.h"
+#include "options.h"
 #include "support.h"
 
 #include <CLI/CLI.hpp>
@@ -25,49 +26,51 @@ int main(int argc, char** argv)
 {
   using namespace dembridge;
   demo::BarConfig c;
-  c.material = DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json";
+  c.material = demo::shipped_file("materials/default.json", DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json");
   bool compare = false;
   int seeds = 1;
   std::string summary, python = "/usr/bin/python3";
   CLI::App app{"The paper's validation bar: FE, coupled and DE models, tension and bending, static and dynamic", "bar"};
-  app.add_option("--model", c.model, "fe | coupled | de")->capture_default_str();
-  app.add_option("--load", c.load, "tension | bending")->capture_default_str();
-  app.add_option("--regime", c.regime, "static | dynamic")->capture_default_str();
+  using demo::Allowed;
+  demo::add_choice(app, "--model", c.model, "model", "fe | coupled | de");
+  demo::add_choice(app, "--load", c.load, "load", "tension | bending");
+  demo::add_choice(app, "--regime", c.regime, "regime", "static | dynamic");
   app.add_flag("--compare", compare, "run all twelve cases (3 models x 2 loads x 2 regimes) and write the paper's table");
-  app.add_option("--seeds", seeds, "with --compare: the twelve cases on this many packings (seed, seed + 1, ...), each in <output>/seed_<s> with its own measured E (unless --fe-youngs-modulus is given), and the models' scatter over them in seeds.md / seeds.json")->capture_default_str();
-  app.add_option("--length", c.length, "bar length [m]")->capture_default_str();
-  app.add_option("--width", c.width, "side of the square section = shell thickness [m]")->capture_default_str();
-  app.add_option("--fe-size", c.fe_size, "shell element size [m] (divides the FE region and the width)")->capture_default_str();
-  app.add_option("--cell", c.cell, "shell cells: quadrilateral | triangle")->capture_default_str();
-  app.add_option("--mean-radius", c.mean_radius, "DE mean radius [m]")->capture_default_str();
-  app.add_option("--radius-ratio", c.radius_ratio, "DE Rmax / Rmin [-]")->capture_default_str();
-  app.add_option("--seed", c.seed, "packing seed")->capture_default_str();
-  app.add_option("--overlap-start", c.overlap_start, "coupled: DE region and overlap start here [m] (a multiple of fe-size)")->capture_default_str();
-  app.add_option("--overlap-layers", c.overlap_layers, "coupled: FE element layers in the overlap")->capture_default_str();
-  app.add_option("--probe-de", c.probe_de, "probe in the DE zone [m]")->capture_default_str();
-  app.add_option("--probe-overlap", c.probe_overlap, "probe in the overlap (de, coupled models) [m]")->capture_default_str();
-  app.add_option("--probe-overlap-fe", c.probe_overlap_fe, "the same probe in the FE model [m]")->capture_default_str();
-  app.add_option("--material", c.material, "DE parameter file from calibrate (the FE side takes its measured E, nu, density)")->capture_default_str();
-  app.add_option("--fe-youngs-modulus", c.fe_youngs_modulus, "E of the FE side and of beam theory [Pa]; 0 = measured on the DE bar in static tension (a DE run first)")->capture_default_str();
-  app.add_option("--skin-compensation", c.skin_compensation, "stiffen the links of the spheres within 2 Rmax of a face by their bulk's links per sphere over their own (true | false)")->capture_default_str();
-  app.add_option("--static-force", c.static_force, "static end force [N]; 0 = 100 kN (tension), 20 kN (bending)")->capture_default_str();
-  app.add_option("--damping", c.damping, "static damping [1/s]; < 0 = critical for the first mode (2 omega_1, beam theory)")->capture_default_str();
-  app.add_option("--end-displacement", c.end_displacement, "dynamic end displacement d0 [m]; 0 = 5e-5 (tension), 2e-4 (bending)")->capture_default_str();
-  app.add_option("--ramp-time", c.ramp_time, "dynamic: d0 (1 - cos(pi t / ramp)) / 2, then released [s]; 0 = one first period (beam theory)")->capture_default_str();
-  app.add_option("--end-time", c.end_time, "physical time [s]; 0 = 3 first periods (static), ramp + 4 periods (dynamic)")->capture_default_str();
-  app.add_option("--safety-factor", c.safety, "fraction of the critical time step, in (0, 1]")->capture_default_str();
-  app.add_option("--frames", c.frames, "XDMF output frames")->capture_default_str();
-  app.add_option("--python", python, "Python with matplotlib for the --compare plots")->capture_default_str();
-  app.add_option("--output", c.output, "output folder (history.csv, shape.csv, shell.xdmf, particles.xdmf); empty = none");
-  app.add_option("--summary", summary, "write key results as JSON to this file");
-  CLI11_PARSE(app, argc, argv);
+  demo::add_integer(app, "--seeds", seeds, "with --compare: the twelve cases on this many packings (seed, seed + 1, ...), each in <output>/seed_<s> with its own measured E (unless --fe-youngs-modulus is given), and the models' scatter over them in seeds.md / seeds.json", Allowed::closed(1, 100));
+  demo::add_number(app, "--length", c.length, "bar length [m]", Allowed::positive(100.0));
+  demo::add_number(app, "--width", c.width, "side of the square section = shell thickness [m]", Allowed::positive(10.0));
+  demo::add_number(app, "--fe-size", c.fe_size, "shell element size [m] (divides the FE region and the width)", Allowed::positive(10.0));
+  demo::add_choice(app, "--cell", c.cell, "shell cells", "quadrilateral | triangle");
+  demo::add_number(app, "--mean-radius", c.mean_radius, "DE mean radius [m]", Allowed::positive(1.0));
+  demo::add_number(app, "--radius-ratio", c.radius_ratio, "DE Rmax / Rmin [-]", Allowed::closed(1.0, 3.0));
+  demo::add_integer(app, "--seed", c.seed, "packing seed", Allowed::closed(0, 4294967295.0));
+  demo::add_number(app, "--overlap-start", c.overlap_start, "coupled: DE region and overlap start here [m] (a multiple of fe-size)", Allowed::positive(100.0));
+  demo::add_integer(app, "--overlap-layers", c.overlap_layers, "coupled: FE element layers in the overlap", Allowed::closed(1, 1000));
+  demo::add_number(app, "--probe-de", c.probe_de, "probe in the DE zone [m]", Allowed::positive(100.0));
+  demo::add_number(app, "--probe-overlap", c.probe_overlap, "probe in the overlap (de, coupled models) [m]", Allowed::positive(100.0));
+  demo::add_number(app, "--probe-overlap-fe", c.probe_overlap_fe, "the same probe in the FE model [m]", Allowed::positive(100.0));
+  demo::add_input_file(app, "--material", c.material, "DE parameter file from calibrate (the FE side takes its measured E, nu, density)")->capture_default_str();
+  demo::add_number(app, "--fe-youngs-modulus", c.fe_youngs_modulus, "E of the FE side and of beam theory [Pa]", Allowed::positive(1e13).or_value(0.0, "measured on the DE bar in static tension (a DE run first)"));
+  std::string skin = c.skin_compensation ? "true" : "false";
+  demo::add_choice(app, "--skin-compensation", skin, "stiffen the links of the spheres within 2 Rmax of a face by their bulk's links per sphere over their own", "true | false");
+  demo::add_number(app, "--static-force", c.static_force, "static end force [N]", Allowed::closed(-1e9, 1e9).or_value(0.0, "100 kN (tension), 20 kN (bending)"));
+  demo::add_number(app, "--damping", c.damping, "static damping [1/s]", Allowed::non_negative(1e9).or_value(-1.0, "critical for the first mode (2 omega_1, beam theory)"));
+  demo::add_number(app, "--end-displacement", c.end_displacement, "dynamic end displacement d0 [m]", Allowed::closed(-1.0, 1.0).or_value(0.0, "5e-5 (tension), 2e-4 (bending)"));
+  demo::add_number(app, "--ramp-time", c.ramp_time, "dynamic: d0 (1 - cos(pi t / ramp)) / 2, then released [s]", Allowed::positive(10.0).or_value(0.0, "one first period (beam theory)"));
+  demo::add_number(app, "--end-time", c.end_time, "physical time [s]", Allowed::positive(10.0).or_value(0.0, "3 first periods (static), ramp + 4 periods (dynamic)"));
+  demo::add_number(app, "--safety-factor", c.safety, "fraction of the critical time step", Allowed::above(0.0, 1.0));
+  demo::add_integer(app, "--frames", c.frames, "XDMF output frames", Allowed::closed(1, 100000));
+  demo::add_program(app, "--python", python, "Python with matplotlib for the --compare plots");
+  demo::add_output_dir(app, "--output", c.output, "output folder (history.csv, shape.csv, shell.xdmf, particles.xdmf); empty = none");
+  demo::add_output_file(app, "--summary", summary, "write key results as JSON to this file");
+  if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
+    return rc;
+  c.skin_compensation = skin == "true";
 
   return demo::run_guarded(argc, argv, [&]
   {
     demo::echo_options(app);
     demo::check_config(c);
-    if (seeds < 1)
-      throw std::runtime_error("seeds " + std::to_string(seeds) + ": allowed is at least 1");
     if (seeds > 1 && !compare)
       throw std::runtime_error("seeds " + std::to_string(seeds) + ": several seeds need --compare");
     // the E the identified parameters give on a bar's packing (each seed's own)
@@ -86,21 +89,21 @@ int main(int argc, char** argv)
       const auto out = demo::run_bar(with_modulus(c));
       std::cout << out.dump(2) << std::endl;
       if (!summary.empty())
-        demo::write_json(summary, out);
+        demo::write_summary(summary, out);
       return;
     }
     const std::filesystem::path root = c.output.empty() ? std::filesystem::path("out/bar_compare") : std::filesystem::path(c.output);
     auto plot = [&](const std::filesystem::path& dir)
     {
-      const std::string cmd = python + " " DEMBRIDGE_SOURCE_DIR "/scripts/plot_bar.py " + dir.string();
-      if (std::system(cmd.c_str()) != 0)
-        std::cerr << "warning: the plots were not made (" << cmd << " failed); the table and CSV files are written\n";
+      const std::vector<std::string> cmd{python, demo::shipped_file("scripts/plot_bar.py", DEMBRIDGE_SOURCE_DIR "/scripts/plot_bar.py"), dir.string()};
+      if (demo::run_program(cmd) != 0)
+        std::cerr << "warning: the plots were not made (" << python << " scripts/plot_bar.py failed); the table and CSV files are written\n";
     };
     if (seeds == 1)
     {
       const auto all = demo::compare_cases(with_modulus(c), root);
       if (!summary.empty())
-        demo::write_json(summary, all);
+        demo::write_summary(summary, all);
       plot(root);
       return;
     }
@@ -122,6 +125,6 @@ int main(int argc, char** argv)
     std::ofstream(root / "seeds.md") << md;
     demo::write_json(root / "seeds.json", scatter);
     if (!summary.empty())
-      demo::write_json(summary, scatter);
-  });
+      demo::write_summary(summary, scatter);
+  }, summary);
 }

@@ -2,24 +2,94 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <csignal>
+#include <cstdlib>
+#include <thread>
+#include <cerrno>
+#include <cstring>
 #include <chrono>
 #include <fstream>
 #include <iostream>
 #include <dolfinx/common/log.h>
 #include <petscsys.h>
+#include <spawn.h>
 #include <stdexcept>
+#include <sys/wait.h>
+
+extern char** environ;
 
 namespace dembridge::demo
 {
 
-int run_guarded(int argc, char** argv, const std::function<void()>& body)
+namespace
+{
+volatile std::sig_atomic_t stop_signal = 0;
+
+extern "C" void on_stop_signal(int sig)
+{
+  stop_signal = sig;
+  std::signal(sig, SIG_DFL); // a second one ends the process at once
+}
+
+void warn_threads()
+{
+  const char* env = std::getenv("OMP_NUM_THREADS");
+  const unsigned cores = std::thread::hardware_concurrency();
+  if (!env || cores == 0)
+    return;
+  char* end = nullptr;
+  const long n = std::strtol(env, &end, 10);
+  if (end != env && n > static_cast<long>(cores))
+    std::cerr << "warning: OMP_NUM_THREADS = " << n << " asks for more threads than the " << cores
+              << " cores of this machine: each step will run slower than on " << cores << " threads"
+              << std::endl;
+}
+} // namespace
+
+bool stop_requested() { return stop_signal != 0; }
+
+Interrupted::Interrupted(double t, int sig)
+    : std::runtime_error("interrupted by " + std::string(sig == SIGTERM ? "SIGTERM" : "SIGINT") + " at t = "
+                         + std::to_string(t) + " s"),
+      time(t), signal(sig)
+{
+}
+
+void check_stop(double t_reached)
+{
+  if (stop_signal != 0)
+    throw Interrupted(t_reached, stop_signal);
+}
+
+int run_guarded(int argc, char** argv, const std::function<void()>& body, const std::filesystem::path& summary)
 {
   PetscInitialize(&argc, &argv, nullptr, nullptr);
   loguru::g_stderr_verbosity = loguru::Verbosity_WARNING; // DOLFINx INFO off
+  // after PETSc, which installs handlers of its own
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
+  warn_threads();
   int rc = 0;
   try
   {
     body();
+  }
+  catch (const Interrupted& e)
+  {
+    std::cerr << "error: " << e.what() << ": stopped at the end of that step; the output files hold the run up "
+                 "to there" << std::endl;
+    rc = 128 + e.signal;
+    if (!summary.empty())
+      try
+      {
+        write_json(summary, {{"completed", false},
+                             {"time_reached_s", e.time},
+                             {"signal", e.signal == SIGTERM ? "SIGTERM" : "SIGINT"}});
+      }
+      catch (const std::exception& w)
+      {
+        std::cerr << "error: " << w.what() << std::endl;
+      }
   }
   catch (const std::exception& e)
   {
@@ -30,20 +100,29 @@ int run_guarded(int argc, char** argv, const std::function<void()>& body)
   return rc;
 }
 
+void write_summary(const std::filesystem::path& file, nlohmann::json j)
+{
+  j["completed"] = true;
+  write_json(file, j);
+}
+
 void write_json(const std::filesystem::path& file, const nlohmann::json& j)
 {
   if (file.has_parent_path())
     std::filesystem::create_directories(file.parent_path());
   std::ofstream out(file);
   if (!out)
-    throw std::runtime_error("cannot write '" + file.string() + "'");
+    throw std::runtime_error("cannot write '" + file.string() + "': " + std::strerror(errno));
   out << j.dump(2) << "\n";
+  out.flush();
+  if (!out)
+    throw std::runtime_error("writing '" + file.string() + "' failed: " + std::strerror(errno));
 }
 
-void echo_options(const CLI::App& app)
+void echo_options(CLI::App& app)
 {
   std::cout << "# " << app.get_name() << ": resolved parameters\n";
-  for (const CLI::Option* opt : app.get_options())
+  for (CLI::Option* opt : app.get_options())
   {
     if (opt->get_name() == "--help" || opt->get_name().empty())
       continue;
@@ -51,7 +130,7 @@ void echo_options(const CLI::App& app)
     for (const auto& r : opt->results())
       val += (val.empty() ? "" : " ") + r;
     if (opt->results().empty())
-      val = opt->get_default_str();
+      val = opt->capture_default_str()->get_default_str(); // the value now (a file may have set it)
     std::cout << "#   " << opt->get_name() << " = " << val << "\n";
   }
   std::cout << std::flush;
@@ -94,6 +173,36 @@ static double now()
 
 Stopwatch::Stopwatch() : _t0(now()) {}
 double Stopwatch::seconds() const { return now() - _t0; }
+
+std::string shipped_file(const std::string& installed, const std::string& source)
+{
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec)
+  {
+    const auto p = exe.parent_path().parent_path() / "share" / "dembridge" / installed;
+    if (std::filesystem::exists(p, ec))
+      return p.string();
+  }
+  return source;
+}
+
+int run_program(const std::vector<std::string>& args)
+{
+  if (args.empty())
+    return -1;
+  std::vector<char*> argv;
+  for (const auto& a : args)
+    argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (posix_spawnp(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0)
+    return -1;
+  int status = 0;
+  if (waitpid(pid, &status, 0) != pid || !WIFEXITED(status))
+    return -1;
+  return WEXITSTATUS(status);
+}
 
 long peak_rss_bytes()
 {

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace CLI
 {
@@ -18,15 +19,41 @@ class App;
 namespace dembridge::demo
 {
 
-/// Initialises PETSc (and MPI), runs `body`, prints any exception as
-/// "error: ..." on stderr and returns a non-zero exit code for it.
-int run_guarded(int argc, char** argv, const std::function<void()>& body);
+/// Initialises PETSc (and MPI), installs the SIGINT and SIGTERM handlers
+/// (stop_requested), runs `body`, prints any exception as "error: ..." on
+/// stderr and returns a non-zero exit code for it: 1 for an error, 128 +
+/// the signal's number (130, 143) for an interrupted run, whose summary, if
+/// `summary` names one, is written with "completed": false and the time
+/// reached. Warns when OMP_NUM_THREADS asks for more threads than cores.
+int run_guarded(int argc, char** argv, const std::function<void()>& body,
+                const std::filesystem::path& summary = {});
+
+/// True once SIGINT or SIGTERM arrived: a run stops at the end of the step
+/// it is in (a second signal ends the process at once).
+bool stop_requested();
+
+/// Thrown by check_stop: the run stopped at its end of step at `time`.
+struct Interrupted : std::runtime_error
+{
+  Interrupted(double t, int sig);
+  double time; ///< physical time reached [s]
+  int signal;  ///< SIGINT or SIGTERM
+};
+
+/// Called at the end of every step of a time loop, with the time reached
+/// [s]: @throws Interrupted if a stop was requested. Files close on the way
+/// out (their writers' destructors), so what was written stays readable.
+void check_stop(double t_reached);
+
+/// Writes a run's summary with "completed": true.
+void write_summary(const std::filesystem::path& file, nlohmann::json j);
 
 /// Writes `j` as indented JSON to `file` (creating its folder).
 void write_json(const std::filesystem::path& file, const nlohmann::json& j);
 
-/// Prints every option of `app` with its resolved value (the run's header).
-void echo_options(const CLI::App& app);
+/// Prints every option of `app` with its resolved value (the run's header):
+/// the value given, else the value the option's variable holds now.
+void echo_options(CLI::App& app);
 
 /// First frequency [Hz] of a near-harmonic signal s(t) from its crossings of
 /// the mid-level (max + min) / 2, linearly interpolated, averaged over all
@@ -47,6 +74,16 @@ public:
 private:
   double _t0;
 };
+
+/// A file shipped with dembridge: share/dembridge/`installed` under the
+/// prefix this executable runs from, when it is there (an installed
+/// program), else `source`, the source tree's copy (a program of the build).
+std::string shipped_file(const std::string& installed, const std::string& source);
+
+/// Runs a program with these arguments (args[0] is looked up on PATH), no
+/// shell involved, and waits for it. Returns its exit code, or -1 if it could
+/// not be started or did not exit normally.
+int run_program(const std::vector<std::string>& args);
 
 /// Resident memory high-water mark of this process [bytes] (Linux).
 long peak_rss_bytes();

@@ -14,6 +14,7 @@
 //   build/bin/coupled_cantilever --fe solid --load bending
 // Output: DIR/shell.xdmf (FE fields), DIR/particles.xdmf (spheres), DIR/history.csv.
 #include "cantilever.h"
+#include "options.h"
 #include "support.h"
 
 #include "dembridge/bridge/coupled.h"
@@ -38,7 +39,7 @@ using namespace dembridge;
 
 struct CoupledCantileverConfig
 {
-  std::string load = "axial", fe_kind = "shell", cell = "quadrilateral", material_file, output, summary;
+  std::string load = "axial", fe_kind = "shell", cell = "auto", material_file, output, summary;
   double length = 0.2, width = 0.05, fe_length = 0.12, de_start = 0.08, mean_radius = 3e-3;
   double amplitude = 1e-6, periods = 2.0, safety = 0.8;
   int nx = 12, ny = 5, nz = 5, frames = 20;
@@ -75,8 +76,12 @@ private:
     if (_c.fe_kind != "shell" && _c.fe_kind != "solid")
       throw std::runtime_error("--fe " + _c.fe_kind + ": allowed are shell, solid");
     _solid = _c.fe_kind == "solid";
-    if (_solid && (_c.cell == "quadrilateral" || _c.cell == "triangle"))
-      _c.cell = "hexahedron";
+    const bool solid_cell = _c.cell == "hexahedron" || _c.cell == "tetrahedron";
+    if (_c.cell == "auto")
+      _c.cell = _solid ? "hexahedron" : "quadrilateral";
+    else if (solid_cell != _solid)
+      throw std::runtime_error("--cell " + _c.cell + " with --fe " + _c.fe_kind + ": allowed are "
+                               + (_solid ? "hexahedron, tetrahedron" : "triangle, quadrilateral"));
     if (_c.load != "axial" && _c.load != "bending")
       throw std::runtime_error("load '" + _c.load + "': allowed are axial, bending");
     if (!(_c.de_start < _c.fe_length && _c.fe_length < _c.length && _c.de_start > 0.0))
@@ -260,6 +265,7 @@ private:
     _tips = {tip_value()};
     _e0 = _s->energy().total();
     std::cout << "     t [s]      tip [m]   total E [J]  imbalance [J]   residual [m/s]\n";
+    write_frame(0, 0.0); // the initial state, a frame at t = 0
     for (std::int64_t k = 1; k <= _nsteps; ++k)
     {
       const double r = _s->step();
@@ -268,6 +274,7 @@ private:
       _tips.push_back(tip_value());
       if (k % _every == 0 || k == _nsteps)
         write_frame(k, r);
+      demo::check_stop(_ts.back());
     }
   }
 
@@ -320,29 +327,32 @@ private:
 int main(int argc, char** argv)
 {
   CoupledCantileverConfig c;
-  c.material_file = DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json";
+  c.material_file = demo::shipped_file("materials/default.json", DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json");
   CLI::App app{"Coupled shell / DE cantilever in free vibration", "coupled_cantilever"};
-  app.add_option("--load", c.load, "axial | bending (first cantilever mode shape)")->capture_default_str();
-  app.add_option("--fe", c.fe_kind, "shell | solid")->capture_default_str();
-  app.add_option("--cell", c.cell, "triangle | quadrilateral (shell); hexahedron | tetrahedron (solid)")
-      ->capture_default_str();
-  app.add_option("--nz", c.nz, "solid divisions through the thickness")->capture_default_str();
-  app.add_option("--length", c.length, "bar length [m]")->capture_default_str();
-  app.add_option("--width", c.width, "side of the square section = shell thickness [m]")->capture_default_str();
-  app.add_option("--fe-length", c.fe_length, "shell region: x in [0, fe-length] [m]")->capture_default_str();
-  app.add_option("--de-start", c.de_start, "DE region: x in [de-start, length] [m]")->capture_default_str();
-  app.add_option("--nx", c.nx, "shell divisions along x (over fe-length)")->capture_default_str();
-  app.add_option("--ny", c.ny, "shell divisions across")->capture_default_str();
-  app.add_option("--mean-radius", c.mean_radius, "mean sphere radius [m]")->capture_default_str();
-  app.add_option("--seed", c.seed, "packing seed")->capture_default_str();
-  app.add_option("--material", c.material_file, "DE parameter file (from calibrate)")->capture_default_str();
-  app.add_option("--amplitude", c.amplitude, "tip amplitude of the initial mode-shape velocity (tip speed = 2 pi f amplitude) [m]")->capture_default_str();
-  app.add_option("--periods", c.periods, "run length in periods of the all-shell model")->capture_default_str();
-  app.add_option("--safety-factor", c.safety, "fraction of the coupled critical time step, in (0, 1]")->capture_default_str();
-  app.add_option("--frames", c.frames, "output frames")->capture_default_str();
-  app.add_option("--output", c.output, "output folder; empty = none");
-  app.add_option("--summary", c.summary, "write key results as JSON to this file");
-  CLI11_PARSE(app, argc, argv);
+  using demo::Allowed;
+  demo::add_choice(app, "--load", c.load, "first cantilever mode shape", "axial | bending");
+  demo::add_choice(app, "--fe", c.fe_kind, "the FE side", "shell | solid");
+  demo::add_choice(app, "--cell", c.cell,
+                   "triangle | quadrilateral (shell); hexahedron | tetrahedron (solid); auto = quadrilateral "
+                   "or hexahedron", "auto | triangle | quadrilateral | hexahedron | tetrahedron");
+  demo::add_integer(app, "--nz", c.nz, "solid divisions through the thickness", Allowed::closed(1, 10000));
+  demo::add_number(app, "--length", c.length, "bar length [m]", Allowed::positive(100.0));
+  demo::add_number(app, "--width", c.width, "side of the square section = shell thickness [m]", Allowed::positive(10.0));
+  demo::add_number(app, "--fe-length", c.fe_length, "shell region: x in [0, fe-length] [m]", Allowed::positive(100.0));
+  demo::add_number(app, "--de-start", c.de_start, "DE region: x in [de-start, length] [m]", Allowed::positive(100.0));
+  demo::add_integer(app, "--nx", c.nx, "shell divisions along x (over fe-length)", Allowed::closed(1, 10000));
+  demo::add_integer(app, "--ny", c.ny, "shell divisions across", Allowed::closed(1, 10000));
+  demo::add_number(app, "--mean-radius", c.mean_radius, "mean sphere radius [m]", Allowed::positive(1.0));
+  demo::add_integer(app, "--seed", c.seed, "packing seed", Allowed::closed(0, 4294967295.0));
+  demo::add_input_file(app, "--material", c.material_file, "DE parameter file (from calibrate)")->capture_default_str();
+  demo::add_number(app, "--amplitude", c.amplitude, "tip amplitude of the initial mode-shape velocity (tip speed = 2 pi f amplitude) [m]", Allowed::positive(1.0));
+  demo::add_number(app, "--periods", c.periods, "run length in periods of the all-shell model", Allowed::positive(1e4));
+  demo::add_number(app, "--safety-factor", c.safety, "fraction of the coupled critical time step", Allowed::above(0.0, 1.0));
+  demo::add_integer(app, "--frames", c.frames, "output frames", Allowed::closed(1, 100000));
+  demo::add_output_dir(app, "--output", c.output, "output folder; empty = none");
+  demo::add_output_file(app, "--summary", c.summary, "write key results as JSON to this file");
+  if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
+    return rc;
 
   return demo::run_guarded(argc, argv, [&]
   {
@@ -350,6 +360,6 @@ int main(int argc, char** argv)
     const nlohmann::json out = CoupledCantileverRun(c).run();
     std::cout << out.dump(2) << std::endl;
     if (!c.summary.empty())
-      demo::write_json(c.summary, out);
-  });
+      demo::write_summary(c.summary, out);
+  }, c.summary);
 }

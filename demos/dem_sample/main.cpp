@@ -13,6 +13,7 @@
 // Output: DIR/particles.xdmf (+ .h5: positions, radius, displacement,
 // velocity, damage, and the broken links as line cells), DIR/stress_strain.csv.
 #include "sample.h"
+#include "options.h"
 #include "support.h"
 #include "dembridge/dem/material_file.h"
 
@@ -26,65 +27,84 @@ int main(int argc, char** argv)
   std::string summary;
   auto& m = c.material;
   CLI::App app{"DE sample in quasi-static uniaxial tension or compression", "dem_sample"};
-  app.add_option("--test", c.test, "tension | compression")->capture_default_str();
-  app.add_option("--shape", c.shape, "cylinder | prism")->capture_default_str();
-  app.add_option("--diameter", c.diameter, "cylinder diameter or prism side [m]")->capture_default_str();
-  app.add_option("--height", c.height, "sample height [m]")->capture_default_str();
-  app.add_option("--mean-radius", c.mean_radius, "mean sphere radius [m]")->capture_default_str();
-  app.add_option("--radius-ratio", c.radius_ratio, "Rmax / Rmin, in [1, 3]")->capture_default_str();
-  app.add_option("--seed", c.seed, "packing random seed")->capture_default_str();
-  app.add_option("--packing", c.packing_file, "read the packing from an 'x y z r' file [m]");
-  app.add_option("--lambda", c.lambda, "interaction range factor (>= 1); 0 = from --links-per-sphere")
-      ->capture_default_str();
-  app.add_option("--links-per-sphere", c.links_per_sphere, "target mean number of links per sphere")
-      ->capture_default_str();
-  std::string material_file;
-  app.add_option("--material", material_file,
-                 "DE parameter file (JSON, from calibrate); options given after it override it");
-  app.add_option("--youngs-modulus", m.youngs_modulus, "E in equation [1] [Pa]")->capture_default_str();
-  app.add_option("--poisson-ratio", m.poisson_ratio, "nu in equation [1] [-]")->capture_default_str();
-  app.add_option("--density", m.density, "bulk density of the concrete [kg/m^3]")->capture_default_str();
-  app.add_option("--alpha", m.micro.alpha, "alpha of equation [1] [-]")->capture_default_str();
-  app.add_option("--beta", m.micro.beta, "beta of equation [1] [-]")->capture_default_str();
-  app.add_option("--gamma", m.micro.gamma, "gamma of equation [1] [-]")->capture_default_str();
-  app.add_option("--tensile-strength", m.tensile, "local tensile strength T [Pa]")->capture_default_str();
-  app.add_option("--cohesion", m.cohesion, "cohesion C0 [Pa]")->capture_default_str();
-  app.add_option("--softening", m.zeta, "softening factor zeta [-]")->capture_default_str();
-  app.add_option("--phi-i", m.phi_i_deg, "internal friction angle [degree]")->capture_default_str();
-  app.add_option("--phi-c", m.phi_c_deg, "contact friction angle [degree]")->capture_default_str();
-  app.add_option("--ligament", c.ligament,
-                 "notch at mid-height: the ligament's share of the cross-section, in (0, 1]; 1 = no notch "
-                 "(stresses and fracture energy are then per ligament area)")->capture_default_str();
-  app.add_option("--strain-rate", c.strain_rate, "platen strain rate [1/s]")->capture_default_str();
-  app.add_option("--max-strain", c.max_strain, "stop at this strain [-]; 0 = 5e-4 tension, 5e-3 compression")
-      ->capture_default_str();
-  app.add_option("--stop-ratio", c.stop_ratio, "stop when the stress falls below this x peak [-]")
-      ->capture_default_str();
+  using demo::Allowed;
+  const Allowed angle{0.0, 90.0, false, true, {}, {}};
+  demo::add_choice(app, "--test", c.test, "the test", "tension | compression");
+  demo::add_choice(app, "--shape", c.shape, "the sample's shape", "cylinder | prism");
+  demo::add_number(app, "--diameter", c.diameter, "cylinder diameter or prism side [m]", Allowed::positive(10.0));
+  demo::add_number(app, "--height", c.height, "sample height [m]", Allowed::positive(10.0));
+  demo::add_number(app, "--mean-radius", c.mean_radius, "mean sphere radius [m]", Allowed::positive(1.0));
+  demo::add_number(app, "--radius-ratio", c.radius_ratio, "Rmax / Rmin [-]", Allowed::closed(1.0, 3.0));
+  demo::add_integer(app, "--seed", c.seed, "packing random seed", Allowed::closed(0, 4294967295.0));
+  demo::add_input_file(app, "--packing", c.packing_file, "read the packing from an 'x y z r' file [m]");
+  demo::add_number(app, "--lambda", c.lambda, "interaction range factor [-]",
+                   Allowed::closed(1.0, 10.0).or_value(0.0, "from --links-per-sphere"));
+  // The file's values are set when --material is read, before the options
+  // below it (CLI11 assigns options in the order they are defined): any of
+  // them given on the command line overrides the file, wherever it stands.
+  // the default concrete: the shipped, calibrated default.json (E 30 GPa,
+  // nu 0.2, sigma_t 3 MPa, sigma_c 16.5 MPa on calibrate's default sample)
+  std::string material_file = demo::shipped_file("materials/default.json", DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json");
+  try
+  {
+    const auto f = dem::read_material(material_file);
+    m = f.material;
+    c.links_per_sphere = f.links_per_sphere;
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "error: the default material: " << e.what() << std::endl;
+    return 1;
+  }
+  demo::add_input_file(app, "--material", material_file,
+                       "DE parameter file (JSON, from calibrate); the material options given override it")
+      ->capture_default_str()
+      ->each([&](const std::string& file)
+             {
+               try
+               {
+                 const auto f = dem::read_material(file);
+                 m = f.material;
+                 c.links_per_sphere = f.links_per_sphere;
+               }
+               catch (const std::exception& e)
+               {
+                 throw CLI::ValidationError("--material", e.what());
+               }
+             });
+  demo::add_number(app, "--links-per-sphere", c.links_per_sphere, "target mean number of links per sphere in the bulk",
+                   Allowed::positive(100.0));
+  demo::add_number(app, "--youngs-modulus", m.youngs_modulus, "E in equation [1] [Pa]", Allowed::positive(1e13));
+  demo::add_number(app, "--poisson-ratio", m.poisson_ratio, "nu in equation [1] [-]", Allowed::open(-1.0, 0.5));
+  demo::add_number(app, "--density", m.density, "bulk density of the concrete [kg/m^3]", Allowed::positive(1e5));
+  demo::add_number(app, "--alpha", m.micro.alpha, "alpha of equation [1] [-]", Allowed::closed(-1e3, 1e3));
+  demo::add_number(app, "--beta", m.micro.beta, "beta of equation [1] [-]", Allowed::closed(-1e3, 1e3));
+  demo::add_number(app, "--gamma", m.micro.gamma, "gamma of equation [1] [-]", Allowed::closed(-1e3, 1e3));
+  demo::add_number(app, "--tensile-strength", m.tensile, "local tensile strength T [Pa]", Allowed::non_negative(1e12));
+  demo::add_number(app, "--cohesion", m.cohesion, "cohesion C0 [Pa]", Allowed::non_negative(1e12));
+  demo::add_number(app, "--softening", m.zeta, "softening factor zeta [-]", Allowed::non_negative(1e6));
+  demo::add_number(app, "--phi-i", m.phi_i_deg, "internal friction angle [degree]", angle);
+  demo::add_number(app, "--phi-c", m.phi_c_deg, "contact friction angle [degree]", angle);
+  demo::add_number(app, "--ligament", c.ligament,
+                   "notch at mid-height: the ligament's share of the cross-section; 1 = no notch "
+                   "(stresses and fracture energy are then per ligament area)", Allowed::above(0.0, 1.0));
+  demo::add_number(app, "--strain-rate", c.strain_rate, "platen strain rate [1/s]", Allowed::positive(1e6));
+  demo::add_number(app, "--max-strain", c.max_strain, "stop at this strain [-]",
+                   Allowed::positive(1.0).or_value(0.0, "5e-4 tension, 5e-3 compression"));
+  demo::add_number(app, "--stop-ratio", c.stop_ratio, "stop when the stress falls below this x peak [-]",
+                   Allowed{0.0, 1.0, false, true, {}, {}});
   app.add_flag("--to-separation", c.to_separation,
                "tension until separated: the force through the crack below 1 % of the peak (fracture energy; "
                "--max-strain 0 then means 5e-3)");
-  app.add_option("--damping", c.damping, "velocity-proportional damping [1/s]; < 0 = automatic")
-      ->capture_default_str();
-  app.add_option("--dt", c.dt, "time step [s]; 0 = safety factor x critical")->capture_default_str();
-  app.add_option("--safety-factor", c.safety, "fraction of the critical time step")->capture_default_str();
-  app.add_option("--frames", c.frames, "XDMF frames if the run goes to --max-strain")->capture_default_str();
-  app.add_option("--output", c.output_dir, "output folder (XDMF, CSV); empty = none");
-  app.add_option("--summary", summary, "write key results as JSON to this file");
-  // --material first, so that explicit options override the file
-  for (int i = 1; i + 1 < argc; ++i)
-    if (std::string(argv[i]) == "--material")
-      try
-      {
-        const auto f = dem::read_material(argv[i + 1]);
-        m = f.material;
-        c.links_per_sphere = f.links_per_sphere;
-      }
-      catch (const std::exception& e)
-      {
-        std::cerr << "error: " << e.what() << std::endl;
-        return 1;
-      }
-  CLI11_PARSE(app, argc, argv);
+  demo::add_number(app, "--damping", c.damping, "velocity-proportional damping [1/s]",
+                   Allowed::non_negative(1e9).or_value(-1.0, "the sample's first axial circular frequency"));
+  demo::add_number(app, "--dt", c.dt, "time step [s]", Allowed::positive(1.0).or_value(0.0, "safety factor x critical"));
+  demo::add_number(app, "--safety-factor", c.safety, "fraction of the critical time step [-]", Allowed::above(0.0, 1.0));
+  demo::add_integer(app, "--frames", c.frames, "XDMF frames if the run goes to --max-strain", Allowed::closed(1, 100000));
+  demo::add_output_dir(app, "--output", c.output_dir, "output folder (XDMF, CSV); empty = none");
+  demo::add_output_file(app, "--summary", summary, "write key results as JSON to this file");
+  if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
+    return rc;
 
   return demo::run_guarded(argc, argv, [&]
   {
@@ -92,6 +112,6 @@ int main(int argc, char** argv)
     const auto r = demo::run_sample(c);
     std::cout << r.dump(2) << std::endl;
     if (!summary.empty())
-      demo::write_json(summary, r);
-  });
+      demo::write_summary(summary, r);
+  }, summary);
 }

@@ -5,6 +5,7 @@
 #include "dembridge/dem/packing.h"
 #include "dembridge/dem/solver.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -368,6 +369,7 @@ private:
       _solver->step();
       if (s % sample_every == 0 || s % frame_every == 0)
         measure(s % print_every == 0, s % frame_every == 0);
+      check_stop(_solver->time());
     }
     measure(true, true);
     if (_writer)
@@ -506,6 +508,7 @@ private:
     // snap-back (the elastic energy the sample releases faster than the
     // crack absorbs it, which a laboratory's closed-loop test avoids), so it
     // is reported apart, not counted.
+    crack_location();
     _out["separated"] = _separated;
     _out["dissipated_links_j"] = e.softening + e.breakage;
     _out["dissipated_before_peak_j"] = _dissipated_at_peak;
@@ -517,6 +520,33 @@ private:
     _out["wall_s"] = _clock.seconds();
     if (_writer)
       _out["frames"] = _writer->frames();
+  }
+
+  /// Where the links broke: the median height of the broken links' mid-points
+  /// (the crack's height in a tension test) and how many broke within 2 Rmax
+  /// of either platen (a crack there would be the platens', not the
+  /// concrete's).
+  void crack_location()
+  {
+    const double H = _cfg.height, band = 2.0 * _rmax;
+    std::vector<double> z;
+    std::size_t near = 0;
+    for (std::size_t k = 0; k < _links.size(); ++k)
+    {
+      if (_links.state[k] == LinkState::intact)
+        continue;
+      const double zm = 0.5 * (_p.x0[3 * _links.a[k] + 2] + _p.x0[3 * _links.b[k] + 2]);
+      z.push_back(zm);
+      near += zm < band || zm > H - band;
+    }
+    _out["links_broken_near_platens"] = near;
+    if (z.empty())
+      _out["crack_height_m"] = nullptr;
+    else
+    {
+      std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
+      _out["crack_height_m"] = z[z.size() / 2];
+    }
   }
 
   // ---- state ----------------------------------------------------------------

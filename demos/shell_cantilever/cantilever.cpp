@@ -9,6 +9,8 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <dolfinx/mesh/Mesh.h>
+#include <dolfinx/mesh/cell_types.h>
 #include <mpi.h>
 #include <numbers>
 #include <stdexcept>
@@ -87,9 +89,18 @@ private:
       throw std::runtime_error("time step " + std::to_string(cfg.dt) + " s: must be > 0 (or 0 for automatic)");
     if (!(cfg.periods > 0.0))
       throw std::runtime_error("periods " + std::to_string(cfg.periods) + ": must be > 0");
-    const Cell cell = parse_cell(cfg.cell);
+    _cell = cfg.cell == "auto" && cfg.mesh_file.empty() ? "quadrilateral" : cfg.cell;
+    if (_cell != "auto")
+      set_cell(_cell);
+  }
+
+  /// The cells, which pick shell or solid; the material checked for them.
+  void set_cell(const std::string& name)
+  {
+    const Cell cell = parse_cell(name);
+    _cell = name;
     _solid = cell == Cell::hexahedron || cell == Cell::tetrahedron;
-    validate(cfg.material, !_solid);
+    validate(_cfg.material, !_solid);
   }
 
   /// Mesh (structured, or read: assumed to lie along local x from 0 to
@@ -97,13 +108,21 @@ private:
   void build_model()
   {
     const CantileverConfig& cfg = _cfg;
-    const Cell cell = parse_cell(cfg.cell);
     const double L = cfg.length, b = cfg.width, h = cfg.material.thickness;
     const Placement& place = cfg.placement;
     std::shared_ptr<dolfinx::mesh::Mesh> mesh;
     if (!cfg.mesh_file.empty())
+    {
+      // the mesh's cells decide shell or solid; a --cell that says otherwise is refused
       mesh = read_mesh(MPI_COMM_WORLD, cfg.mesh_file);
-    else if (_solid)
+      const std::string in_mesh = dolfinx::mesh::to_string(mesh->topology().cell_type());
+      if (_cell != "auto" && _cell != in_mesh)
+        throw std::runtime_error("--cell " + _cell + " conflicts with the cells of the mesh '" + cfg.mesh_file
+                                 + "' (" + in_mesh + "): leave --cell out, or give --cell " + in_mesh);
+      set_cell(in_mesh);
+    }
+    const Cell cell = parse_cell(_cell);
+    if (!mesh && _solid)
     {
       Placement below = place;
       const auto ez = column(place, 2);
@@ -111,7 +130,7 @@ private:
         below.origin[i] -= 0.5 * h * ez[i];
       mesh = create_solid_box(MPI_COMM_WORLD, {L, b, h}, {cfg.nx, cfg.ny, cfg.nz}, cell, below);
     }
-    else
+    else if (!mesh)
       mesh = create_shell_rectangle(MPI_COMM_WORLD, L, b, cfg.nx, cfg.ny, cell, place);
     _model = std::make_unique<FEModel>(mesh, cfg.material, parse_force_method(cfg.force_method));
     _bs = _model->block_size();
@@ -157,7 +176,7 @@ private:
   void describe()
   {
     _out["load"] = _cfg.load;
-    _out["cell"] = _cfg.cell;
+    _out["cell"] = _cell;
     _out["model"] = _solid ? "solid" : "shell";
     _out["nodes"] = _model->num_nodes();
     _out["dofs"] = _model->num_dofs();
@@ -349,6 +368,7 @@ private:
           write_energy(e, s % print_every == 0 || s == nsteps);
         }
       }
+      check_stop(_solver->time());
     }
     if (_writer)
       _writer->close();
@@ -395,6 +415,7 @@ private:
   Stopwatch _clock;
   nlohmann::json _out;
   // the model
+  std::string _cell; // resolved: from --cell, or the mesh's
   bool _solid = false;
   std::unique_ptr<FEModel> _model;
   int _bs = 0;

@@ -43,7 +43,7 @@ struct CantileverConfig
   bool quiet = false;                  ///< no progress lines
 };
 
-/// Runs the experiment; returns the summary (keys of issue "Foundation":
+/// Runs the experiment; returns the summary (keys:
 /// first_frequency_hz, reference_frequency_hz, tip_deflection_m,
 /// reference_deflection_m, relative_error, dt_s, steps, wall_s, and more).
 /// @throws std::runtime_error on bad input.

@@ -19,6 +19,7 @@
 // Output (with --output DIR): DIR/cantilever.xdmf (+ .h5) for ParaView,
 // DIR/history.csv (tip displacement and energy budget over time).
 #include "cantilever.h"
+#include "options.h"
 #include "support.h"
 
 #include <CLI/CLI.hpp>
@@ -28,52 +29,53 @@ int main(int argc, char** argv)
 {
   using namespace dembridge;
   demo::CantileverConfig c;
+  c.cell = "auto"; // from --mesh, else quadrilateral
   std::string summary;
   std::array<double, 3> axis{0.0, 0.0, 1.0}, shift{0.0, 0.0, 0.0};
   double angle_deg = 0.0;
   auto& m = c.material;
 
   CLI::App app{"Shell (or solid) cantilever checked against beam theory", "shell_cantilever"};
-  app.add_option("--load", c.load, "axial | bending | static-tip")->capture_default_str();
-  app.add_option("--cell", c.cell, "triangle | quadrilateral (shell); hexahedron | tetrahedron (solid)")
-      ->capture_default_str();
-  app.add_option("--nx", c.nx, "divisions along the length")->capture_default_str();
-  app.add_option("--ny", c.ny, "divisions across the width")->capture_default_str();
-  app.add_option("--nz", c.nz, "divisions through the thickness (solids)")->capture_default_str();
-  app.add_option("--mesh", c.mesh_file, "XDMF mesh file instead of the structured mesh "
-                                        "(bar along local x from 0 to --length)");
-  app.add_option("--length", c.length, "bar length L [m]")->capture_default_str();
-  app.add_option("--width", c.width, "bar width b [m]")->capture_default_str();
-  app.add_option("--thickness", m.thickness, "shell thickness / bar depth h [m]")->capture_default_str();
-  app.add_option("--youngs-modulus", m.youngs_modulus, "Young's modulus E [Pa]")->capture_default_str();
-  app.add_option("--poisson-ratio", m.poisson_ratio, "Poisson's ratio nu [-]")->capture_default_str();
-  app.add_option("--density", m.density, "density rho [kg/m^3]")->capture_default_str();
-  app.add_option("--shear-factor", m.shear_factor, "transverse shear factor k [-]")->capture_default_str();
-  app.add_option("--drilling", m.drilling, "drilling penalty, fraction of G h [-]")->capture_default_str();
-  app.add_option("--tip-load", c.tip_load, "static tip load P along local z [N]")->capture_default_str();
-  app.add_option("--amplitude", c.amplitude, "initial modal tip amplitude [m]")->capture_default_str();
-  app.add_option("--initial", c.initial,
-                 "initial shape (dynamic): mode (FE first mode by inverse iteration) | "
-                 "analytic (beam mode shape) | static (tip-load shape)")
-      ->capture_default_str();
-  app.add_option("--periods", c.periods, "run length in reference periods (dynamic, if --end-time 0)")
-      ->capture_default_str();
-  app.add_option("--end-time", c.end_time, "end time [s]; 0 = automatic")->capture_default_str();
-  app.add_option("--dt", c.dt, "time step [s]; 0 = safety factor x critical")->capture_default_str();
-  app.add_option("--safety-factor", c.safety, "fraction of the critical time step [-]")->capture_default_str();
-  app.add_option("--damping", c.damping,
-                 "mass-proportional damping c [1/s]; < 0 = automatic (0 dynamic, 2 omega_1 static)")
-      ->capture_default_str();
-  app.add_option("--solver", c.solver, "static-tip: explicit | direct | both")->capture_default_str();
-  app.add_option("--internal-force", c.force_method, "matmult (K u, K assembled once) | residual")
-      ->capture_default_str();
-  app.add_option("--rotate-axis", axis, "placement: rotation axis [-]")->capture_default_str();
-  app.add_option("--rotate-angle", angle_deg, "placement: rotation angle [degree]")->capture_default_str();
-  app.add_option("--translate", shift, "placement: translation [m]")->capture_default_str();
-  app.add_option("--frames", c.frames, "XDMF frames over the run")->capture_default_str();
-  app.add_option("--output", c.output_dir, "output folder (XDMF, CSV); empty = none");
-  app.add_option("--summary", summary, "write key results as JSON to this file");
-  CLI11_PARSE(app, argc, argv);
+  using demo::Allowed;
+  demo::add_choice(app, "--load", c.load, "what the bar does", "axial | bending | static-tip");
+  demo::add_choice(app, "--cell", c.cell,
+                   "cells: triangle | quadrilateral (shell); hexahedron | tetrahedron (solid); auto = "
+                   "those of --mesh, else quadrilateral",
+                   "auto | triangle | quadrilateral | hexahedron | tetrahedron");
+  demo::add_integer(app, "--nx", c.nx, "divisions along the length", Allowed::closed(1, 10000));
+  demo::add_integer(app, "--ny", c.ny, "divisions across the width", Allowed::closed(1, 10000));
+  demo::add_integer(app, "--nz", c.nz, "divisions through the thickness (solids)", Allowed::closed(1, 10000));
+  demo::add_input_file(app, "--mesh", c.mesh_file, "XDMF mesh file instead of the structured mesh "
+                                                   "(bar along local x from 0 to --length; its cells pick shell or solid)");
+  demo::add_number(app, "--length", c.length, "bar length L [m]", Allowed::positive(100.0));
+  demo::add_number(app, "--width", c.width, "bar width b [m]", Allowed::positive(100.0));
+  demo::add_number(app, "--thickness", m.thickness, "shell thickness / bar depth h [m]", Allowed::positive(10.0));
+  demo::add_number(app, "--youngs-modulus", m.youngs_modulus, "Young's modulus E [Pa]", Allowed::positive(1e13));
+  demo::add_number(app, "--poisson-ratio", m.poisson_ratio, "Poisson's ratio nu [-]", Allowed::open(-1.0, 0.5));
+  demo::add_number(app, "--density", m.density, "density rho [kg/m^3]", Allowed::positive(1e5));
+  demo::add_number(app, "--shear-factor", m.shear_factor, "transverse shear factor k [-]", Allowed::positive(10.0));
+  demo::add_number(app, "--drilling", m.drilling, "drilling penalty, fraction of G h [-]", Allowed::positive(1e3));
+  demo::add_number(app, "--tip-load", c.tip_load, "static tip load P along local z [N]", Allowed::closed(-1e10, 1e10));
+  demo::add_number(app, "--amplitude", c.amplitude, "initial modal tip amplitude [m]", Allowed::positive(1.0));
+  demo::add_choice(app, "--initial", c.initial,
+                   "initial shape (dynamic): mode (FE first mode by inverse iteration) | "
+                   "analytic (beam mode shape) | static (tip-load shape)", "mode | analytic | static");
+  demo::add_number(app, "--periods", c.periods, "run length in reference periods (dynamic, if --end-time 0)", Allowed::positive(1e4));
+  demo::add_number(app, "--end-time", c.end_time, "end time [s]", Allowed::positive(100.0).or_value(0.0, "automatic"));
+  demo::add_number(app, "--dt", c.dt, "time step [s]", Allowed::positive(1.0).or_value(0.0, "safety factor x critical"));
+  demo::add_number(app, "--safety-factor", c.safety, "fraction of the critical time step [-]", Allowed::above(0.0, 1.0));
+  demo::add_number(app, "--damping", c.damping, "mass-proportional damping c [1/s]",
+                   Allowed::non_negative(1e9).or_value(-1.0, "automatic (0 dynamic, 2 omega_1 static)"));
+  demo::add_choice(app, "--solver", c.solver, "static-tip", "explicit | direct | both");
+  demo::add_choice(app, "--internal-force", c.force_method, "matmult (K u, K assembled once) | residual", "matmult | residual");
+  demo::add_vector(app, "--rotate-axis", axis, "placement: rotation axis [-]", Allowed::closed(-1e6, 1e6));
+  demo::add_number(app, "--rotate-angle", angle_deg, "placement: rotation angle [degree]", Allowed::closed(-360.0, 360.0));
+  demo::add_vector(app, "--translate", shift, "placement: translation [m]", Allowed::closed(-1e6, 1e6));
+  demo::add_integer(app, "--frames", c.frames, "XDMF frames over the run", Allowed::closed(1, 100000));
+  demo::add_output_dir(app, "--output", c.output_dir, "output folder (XDMF, CSV); empty = none");
+  demo::add_output_file(app, "--summary", summary, "write key results as JSON to this file");
+  if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
+    return rc;
 
   return demo::run_guarded(argc, argv, [&]
   {
@@ -82,6 +84,6 @@ int main(int argc, char** argv)
     const auto result = demo::run_cantilever(c);
     std::cout << result.dump(2) << std::endl;
     if (!summary.empty())
-      demo::write_json(summary, result);
-  });
+      demo::write_summary(summary, result);
+  }, summary);
 }

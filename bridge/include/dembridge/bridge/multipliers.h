@@ -7,8 +7,11 @@
 ///   A = dt (G_DE m~^-1 G_DE^T + G_FE M~^-1 G_FE^T)   (SPD, 3 x 3 blocks),
 ///   v_DE = v*_DE - dt m~^-1 G_DE^T lambda,  v_FE = v*_FE + dt M~^-1 G_FE^T lambda.
 /// G_DE selects the constrained particles; G_FE is the CouplingOperator. A is
-/// assembled and factorised (sparse LDL^T) once: it is constant while the
-/// geometry is linearised. After the correction the constraint holds to the
+/// never formed: by the Woodbury identity only K = M~_FE + G_FE^T m~_DE G_FE,
+/// over the FE dofs the overlap touches, is assembled and factorised (sparse
+/// LDL^T), once (it is constant while the geometry is linearised), and a
+/// correction is v_FE += s, v_DE -= r - G_FE s with r = v*_DE - G_FE v*_FE,
+/// s = K^-1 G_FE^T m~_DE r. After the correction the constraint holds to the
 /// solver's precision; `correct` returns the residual.
 
 #include "dembridge/bridge/fictive.h"

@@ -8,8 +8,8 @@
 /// sphere against 12 in the bulk, and the layer under it is looser. The
 /// assembly is then soft in a skin about two radii deep, which weighs little
 /// in tension but much in bending (z^2): a 0.25 m concrete bar of 1 cm
-/// spheres is 6.6-9.1 % more compliant in bending than the E it shows in
-/// tension predicts (README, the validation bar). The correction gives each
+/// spheres is 5.9-7.9 % more compliant in bending than the E it shows in
+/// tension predicts (docs/validation.md, the validation bar). The correction gives each
 /// sphere within `depth` of the region's boundary a factor f_i = z_bulk / z_i
 /// (at least 1; z_i its links, z_bulk the mean over the bulk spheres) and
 /// multiplies each link's K_n and K_s by the mean of its two spheres'

@@ -2,7 +2,11 @@
 /// @file output.h
 /// XDMF + HDF5 time series of an FE model for ParaView: displacement [m],
 /// velocity [m/s] and, for shells, rotation [rad], angular velocity [rad/s]
-/// and average nodal normal, each as a 3-vector field on the mesh.
+/// and average nodal normal, each a 3-vector field at the nodes. The mesh
+/// (reference coordinates /mesh/geometry, cells /mesh/topology) is written
+/// once; each time step is one grid carrying every field (/frame_k/<field>),
+/// all in 64-bit floats, so one can colour by one field and warp by another.
+/// The file is flushed and the XDMF rewritten at every frame.
 
 #include <filesystem>
 #include <memory>
