@@ -203,7 +203,8 @@ TEST_CASE("critical time steps by power iteration: stable below, unstable above"
     random_velocities(b.p);
     bridge::CouplingOptions o;
     o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
-    o.safety = 0.97;
+    const double dt_c = bridge::CoupledSolver(*b.fe, b.p, b.l, b.mat, o).dt_coupled();
+    o.dt = 0.97 * dt_c; // beyond the safety factors allowed (0.95), within the estimate
     bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
     s.start(std::vector<double>(b.fe->num_dofs(), 0.0), std::vector<double>(b.fe->num_dofs(), 0.0));
     CoupledRun run{s};
@@ -211,6 +212,47 @@ TEST_CASE("critical time steps by power iteration: stable below, unstable above"
     INFO("coupled dt " << s.dt_coupled() << " s (alone: FE " << s.dt_fe() << ", DE " << s.dt_de()
                        << "), energy growth " << g);
     CHECK(g < 2.0);
+  }
+}
+
+TEST_CASE("energy guards: unstable DE and coupled runs stop on their energy, before any NaN", "[bridge][errors]")
+{
+  // DE alone at 1.01 x its critical step (omega dt = 2.02: the highest mode
+  // grows by about 1.15 a step): the DEM's guard stops it at a check, with
+  // its state still finite. (At 1.05 x the growth, ~1.5 a step, turns a
+  // sphere by more than 1 rad before the first check, and the force loop's
+  // own check stops the run.)
+  {
+    auto b = make_bar(shell::Cell::quadrilateral);
+    const double dt_c = bridge::particle_critical_time_step(b.p, b.l);
+    random_velocities(b.p);
+    dem::DemSolver s(b.p, b.l, b.mat, 1.01 * dt_c, 0.0, 0.5e-3);
+    s.start();
+    CHECK_THROWS_WITH([&] { for (int k = 0; k < 3000; ++k) s.step(); }(),
+                      Contains("energy grows without cause") && Contains("unstable"));
+    CHECK(std::all_of(b.p.v.begin(), b.p.v.end(), [](double v) { return std::isfinite(v); }));
+  }
+  // Coupled: energy created from nothing (every sphere's velocity scaled by
+  // 10 mid-run: 100 x the kinetic energy, no work) is caught by the
+  // coupler's guard within 100 steps; the sides' own guards are off (each
+  // side's budget carries the multipliers' work).
+  {
+    auto b = make_bar(shell::Cell::quadrilateral);
+    random_velocities(b.p);
+    bridge::CouplingOptions o;
+    o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
+    bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
+    s.start(std::vector<double>(b.fe->num_dofs(), 0.0), std::vector<double>(b.fe->num_dofs(), 0.0));
+    for (int k = 0; k < 150; ++k)
+      s.step(false);
+    for (auto& v : b.p.v)
+      v *= 10.0;
+    CHECK_THROWS_WITH([&] { for (int k = 0; k < 100; ++k) s.step(false); }(),
+                      Contains("coupled system's energy grows without cause"));
+    bridge::CouplingOptions bad = o;
+    bad.safety = 1.0;
+    auto c = make_bar(shell::Cell::quadrilateral);
+    CHECK_THROWS_WITH(bridge::CoupledSolver(*c.fe, c.p, c.l, c.mat, bad), Contains("allowed is (0, 0.95]"));
   }
 }
 

@@ -834,6 +834,13 @@ TEST_CASE("threads: the same run bit for bit on 1, 2 and 3 threads, links breaki
     auto l = create_links(p, 1.4, m);
     const double dt = 0.5 * critical_time_step(p, l);
     DemSolver s(p, l, m, dt, 50.0, 0.2e-3);
+    // This jittered lattice overlaps by up to 0.2 mm (radii 0.8-1 mm on a
+    // 2 mm grid): a link that breaks hands over to a contact already
+    // compressed by the overlap, whose energy no term of the budget books
+    // (in a packing from generate_packing overlaps stay below 1e-3 Rmin).
+    // The energy guard would stop the run at once; this test is about the
+    // force loop's bits, so it is off here.
+    s.set_energy_guard(0.0);
     auto bottom = DemSolver::select(p, [](const auto& x) { return x[2] < 1e-3; }, "bottom");
     auto top = DemSolver::select(p, [](const auto& x) { return x[2] > 11e-3; }, "top");
     s.add_motion({"bottom", bottom, MotionKind::fixed, {true, true, true}, {}});

@@ -119,13 +119,40 @@ TEST_CASE("power iteration: largest eigenvalue of a spring chain", "[explicit]")
 
 TEST_CASE("non-finite state stops the run with a message", "[explicit][errors]")
 {
-  // A step far above the critical 2/w makes the oscillator blow up.
+  // A step far above the critical 2/w makes the oscillator blow up (the
+  // energy guard, which would stop it first, off).
   ExplicitSolver s({1.0}, chain(1e4), 0.1);
+  s.set_energy_guard(0.0);
   std::vector<double> u0{1.0}, v0{0.0};
   s.set_state(u0, v0);
   CHECK_THROWS_WITH(
       [&] { for (int i = 0; i < 100000; ++i) s.step(); }(),
       Catch::Contains("non-finite") && Catch::Contains("dof 0"));
+}
+
+TEST_CASE("energy guard: an unstable run stops on its energy, before any NaN", "[explicit][errors]")
+{
+  // omega dt = 2.04, just above the limit 2: the oscillator's amplitude grows
+  // by about 1.2 a step, and its energy is not explained by any work. The
+  // guard (margin 0.5, every 100 steps) stops it at its first check; below
+  // the limit (omega dt = 1.96) the energy oscillates by O((omega dt)^2) of
+  // itself, within the margin, and 10,000 steps run.
+  const double k = 1e4, w = std::sqrt(k);
+  for (double wdt : {1.96, 2.04})
+  {
+    ExplicitSolver s({1.0}, chain(k), wdt / w);
+    std::vector<double> u0{1.0}, v0{0.0};
+    s.set_state(u0, v0);
+    auto run = [&] { for (int i = 0; i < 10000; ++i) s.step(); };
+    if (wdt < 2.0)
+      CHECK_NOTHROW(run());
+    else
+    {
+      CHECK_THROWS_WITH(run(), Catch::Contains("energy grows without cause") && Catch::Contains("step 100"));
+      CHECK(std::isfinite(s.u()[0]));
+    }
+  }
+  CHECK_THROWS_WITH(ExplicitSolver({1.0}, chain(k), 1e-3).set_energy_guard(-1.0), Catch::Contains("margin"));
 }
 
 TEST_CASE("selections: a region with no node is an error", "[explicit][errors]")

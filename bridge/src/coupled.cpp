@@ -40,6 +40,11 @@ CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& 
     const double rmin = *std::min_element(p.r.begin(), p.r.end());
     _de_solver = std::make_unique<dem::DemSolver>(p, l, mat, _dt, o.damping_de,
                                                   o.skin > 0.0 ? o.skin : 0.5 * rmin);
+    // each side's budget carries the multipliers' work, so only the sum
+    // closes: the coupler guards that
+    _fe_solver->set_energy_guard(0.0);
+    _de_solver->set_energy_guard(0.0);
+    _guard_margin = o.energy_guard;
   }
   catch (...)
   {
@@ -74,12 +79,15 @@ void CoupledSolver::validate(const CouplingOptions& o)
 {
   o.overlap.validate();
   (void)floored(0.5, o.weight_floor); // validates the floor
-  if (!(o.safety > 0.0 && o.safety <= 1.0))
+  if (!(o.safety > 0.0 && o.safety <= 0.95))
   {
     std::ostringstream m;
-    m << "time step safety factor " << o.safety << ": allowed is (0, 1]";
+    m << "time step safety factor " << o.safety
+      << ": allowed is (0, 0.95] (the coupled critical step is an estimate from below)";
     throw std::runtime_error(m.str());
   }
+  if (!(o.energy_guard >= 0.0) || !std::isfinite(o.energy_guard))
+    throw std::runtime_error("energy guard " + std::to_string(o.energy_guard) + ": allowed is >= 0 (0 = off)");
 }
 
 void CoupledSolver::own_critical_steps()
@@ -274,7 +282,26 @@ double CoupledSolver::step(bool observed)
   _time.fe += (t1 - t0) + (t4 - t3);
   _time.de += (t2 - t1) + (t5 - t4);
   _time.multipliers += (t3 - t2) + (t6 - t5);
+  if (_guard_margin > 0.0 && _de_solver->steps() % 100 == 0)
+    check_energy();
   return _residual;
+}
+
+void CoupledSolver::check_energy() const
+{
+  const CoupledEnergy e = energy();
+  const double initial = e.fe.initial + e.de.initial;
+  const double work = e.fe.external_work + e.fe.prescribed_work + e.de.external_work + e.de.prescribed_work;
+  const double scale = initial + std::abs(e.fe.external_work) + std::abs(e.fe.prescribed_work)
+                       + std::abs(e.de.external_work) + std::abs(e.de.prescribed_work) + e.total();
+  if (!(scale > 0.0) || e.imbalance() <= _guard_margin * scale)
+    return;
+  std::ostringstream s;
+  s << "the coupled system's energy grows without cause at t = " << _de_solver->time() << " s (step "
+    << _de_solver->steps() << "): kinetic + stored " << e.total() << " J against initial " << initial
+    << " J + work " << work << " J (" << e.imbalance() << " J unaccounted for, more than " << _guard_margin
+    << " x the energy scale): the run is unstable; reduce the time step";
+  throw std::runtime_error(s.str());
 }
 
 CoupledEnergy CoupledSolver::energy() const

@@ -137,7 +137,7 @@ void DemSolver::begin_step()
   _time.integration += omp_get_wtime() - t0;
 }
 
-std::pair<double, double> DemSolver::drift()
+DemSolver::Drift DemSolver::drift()
 {
   const std::size_t n = _p.size();
   const double dt = _dt;
@@ -147,7 +147,7 @@ std::pair<double, double> DemSolver::drift()
   // same sums whatever the thread count)
   constexpr std::size_t block = 1024;
   const std::size_t nb = (n + block - 1) / block;
-  _part.resize(2 * nb);
+  _part.resize(3 * nb);
   // moves by multiples of the position quantum q (Particles::quantum):
   // (d + C) - C rounds d to a multiple of q for |d| < 2^51 q, C = 1.5 2^52 q,
   // and x + that is exact, so equal velocities move spheres by equal bits
@@ -156,7 +156,7 @@ std::pair<double, double> DemSolver::drift()
 #pragma omp parallel for schedule(static) num_threads(impl::threads_for(n))
   for (std::size_t b = 0; b < nb; ++b)
   {
-    double we = 0.0, wd = 0.0;
+    double we = 0.0, wd = 0.0, ke = 0.0;
     for (std::size_t i = b * block; i < std::min(n, (b + 1) * block); ++i)
     {
       double v2 = 0.0, w2 = 0.0;
@@ -171,17 +171,20 @@ std::pair<double, double> DemSolver::drift()
         w2 += _p.w[3 * i + k] * _p.w[3 * i + k];
       }
       wd += dt * _c * (_p.m[i] * v2 + _p.inertia[i] * w2);
+      ke += 0.5 * (_p.m[i] * v2 + _p.inertia[i] * w2);
     }
-    _part[2 * b] = we;
-    _part[2 * b + 1] = wd;
+    _part[3 * b] = we;
+    _part[3 * b + 1] = wd;
+    _part[3 * b + 2] = ke;
   }
-  double w_ext = 0.0, w_damp = 0.0;
+  Drift d;
   for (std::size_t b = 0; b < nb; ++b)
   {
-    w_ext += _part[2 * b];
-    w_damp += _part[2 * b + 1];
+    d.external_work += _part[3 * b];
+    d.damping += _part[3 * b + 1];
+    d.kinetic += _part[3 * b + 2];
   }
-  return {w_ext, w_damp};
+  return d;
 }
 
 double DemSolver::held_reactions()
@@ -232,7 +235,8 @@ void DemSolver::end_step()
   std::swap(_fext_old, _fext); // no allocation in the step loop
   if (!_forces.empty())
     external(_forces, t_new, _fext);
-  const auto [w_ext, w_damp] = drift();
+  const Drift moved = drift();
+  const double w_ext = moved.external_work, w_damp = moved.damping;
   const double t1 = omp_get_wtime();
   _nl.update(_p.x, _p.r, _l);
   const double t2 = omp_get_wtime();
@@ -258,7 +262,54 @@ void DemSolver::end_step()
   _e.damping += w_damp;
   _e.prescribed_work += w_presc;
   check_finite();
+  if (_guard_margin > 0.0)
+  {
+    // every step, the cheap half of the guard: the kinetic energy (at the
+    // half step) cannot exceed the initial energy plus the work done, as the
+    // stored and dissipated energies are >= 0. The work of prescribed
+    // velocities is booked through their reactions, to within a factor 2 of
+    // the kinetic energy they impart in the steps after an impulsive start
+    // (measured), hence the factor 10.
+    const double budget = _e.initial + std::abs(_e.external_work) + std::abs(_e.prescribed_work);
+    if (budget > 0.0 && moved.kinetic > 10.0 * budget)
+      energy_runaway(moved.kinetic, budget);
+    if (_steps % _guard_every == 0)
+      check_energy();
+  }
   _time.integration += (t1 - t0) + (omp_get_wtime() - t3);
+}
+
+void DemSolver::check_energy() const
+{
+  const DemEnergy e = energy();
+  const double work = e.external_work + e.prescribed_work;
+  const double scale = e.initial + std::abs(e.external_work) + std::abs(e.prescribed_work) + e.kinetic + e.elastic;
+  if (!(scale > 0.0) || e.imbalance() <= _guard_margin * scale)
+    return;
+  std::ostringstream s;
+  s << "the energy grows without cause at t = " << _t << " s (step " << _steps << "): kinetic + elastic "
+    << e.kinetic + e.elastic << " J against initial " << e.initial << " J + work " << work << " J ("
+    << e.imbalance() << " J unaccounted for, more than " << _guard_margin
+    << " x the energy scale): the run is unstable; reduce the time step";
+  throw std::runtime_error(s.str());
+}
+
+void DemSolver::energy_runaway(double kinetic, double budget) const
+{
+  std::ostringstream s;
+  s << "the energy grows without cause at t = " << _t << " s (step " << _steps << "): kinetic energy "
+    << kinetic << " J against initial + work " << budget
+    << " J (more than 10 x): the run is unstable; reduce the time step";
+  throw std::runtime_error(s.str());
+}
+
+void DemSolver::set_energy_guard(double margin, std::int64_t every)
+{
+  if (!(margin >= 0.0) || !std::isfinite(margin) || every < 1)
+    throw std::runtime_error("energy guard: margin " + std::to_string(margin) + " must be >= 0 (0 = off), every "
+                             + std::to_string(every) + " steps >= 1");
+  _guard_margin = margin;
+  _guard_every = every;
 }
 
 DemEnergy DemSolver::energy() const

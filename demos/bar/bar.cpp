@@ -52,8 +52,8 @@ void check_config(const BarConfig& c)
     bad("mean-radius [m]", c.mean_radius, "in (0, width / 10)");
   if (c.overlap_layers < 1)
     bad("overlap-layers", c.overlap_layers, ">= 1");
-  if (!(c.safety > 0.0 && c.safety <= 1.0))
-    bad("safety-factor", c.safety, "in (0, 1]");
+  if (!(c.safety > 0.0 && c.safety <= 0.95))
+    bad("safety-factor", c.safety, "in (0, 0.95] (the critical step is a power-iteration estimate, from below)");
   if (c.damping >= 0.0 && !std::isfinite(c.damping))
     bad("damping [1/s]", c.damping, "finite, >= 0 (or < 0 for the default)");
   for (double p : {c.probe_de, c.probe_overlap, c.probe_overlap_fe})

@@ -58,7 +58,7 @@ int main(int argc, char** argv)
   demo::add_number(app, "--end-displacement", c.end_displacement, "dynamic end displacement d0 [m]", Allowed::closed(-1.0, 1.0).or_value(0.0, "5e-5 (tension), 2e-4 (bending)"));
   demo::add_number(app, "--ramp-time", c.ramp_time, "dynamic: d0 (1 - cos(pi t / ramp)) / 2, then released [s]", Allowed::positive(10.0).or_value(0.0, "one first period (beam theory)"));
   demo::add_number(app, "--end-time", c.end_time, "physical time [s]", Allowed::positive(10.0).or_value(0.0, "3 first periods (static), ramp + 4 periods (dynamic)"));
-  demo::add_number(app, "--safety-factor", c.safety, "fraction of the critical time step", Allowed::above(0.0, 1.0));
+  demo::add_number(app, "--safety-factor", c.safety, "fraction of the critical time step (a power-iteration estimate, from below)", Allowed::above(0.0, 0.95));
   demo::add_integer(app, "--frames", c.frames, "XDMF output frames", Allowed::closed(1, 100000));
   demo::add_program(app, "--python", python, "Python with matplotlib for the --compare plots");
   demo::add_output_dir(app, "--output", c.output, "output folder (history.csv, shape.csv, shell.xdmf, particles.xdmf); empty = none");

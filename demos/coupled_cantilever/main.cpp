@@ -347,7 +347,7 @@ int main(int argc, char** argv)
   demo::add_input_file(app, "--material", c.material_file, "DE parameter file (from calibrate)")->capture_default_str();
   demo::add_number(app, "--amplitude", c.amplitude, "tip amplitude of the initial mode-shape velocity (tip speed = 2 pi f amplitude) [m]", Allowed::positive(1.0));
   demo::add_number(app, "--periods", c.periods, "run length in periods of the all-shell model", Allowed::positive(1e4));
-  demo::add_number(app, "--safety-factor", c.safety, "fraction of the coupled critical time step", Allowed::above(0.0, 1.0));
+  demo::add_number(app, "--safety-factor", c.safety, "fraction of the coupled critical time step (a power-iteration estimate, from below)", Allowed::above(0.0, 0.95));
   demo::add_integer(app, "--frames", c.frames, "output frames", Allowed::closed(1, 100000));
   demo::add_output_dir(app, "--output", c.output, "output folder; empty = none");
   demo::add_output_file(app, "--summary", c.summary, "write key results as JSON to this file");

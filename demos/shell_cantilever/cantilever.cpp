@@ -83,8 +83,9 @@ private:
       throw std::runtime_error("load '" + cfg.load + "': allowed are axial, bending, static-tip");
     if (cfg.solver != "explicit" && cfg.solver != "direct" && cfg.solver != "both")
       throw std::runtime_error("solver '" + cfg.solver + "': allowed are explicit, direct, both");
-    if (!(cfg.safety > 0.0 && cfg.safety <= 1.0))
-      throw std::runtime_error("safety factor " + std::to_string(cfg.safety) + ": must be in (0, 1]");
+    if (!(cfg.safety > 0.0 && cfg.safety <= 0.95))
+      throw std::runtime_error("safety factor " + std::to_string(cfg.safety)
+                               + ": must be in (0, 0.95] (the critical step is a power-iteration estimate, from below)");
     if (cfg.dt < 0.0)
       throw std::runtime_error("time step " + std::to_string(cfg.dt) + " s: must be > 0 (or 0 for automatic)");
     if (!(cfg.periods > 0.0))

@@ -63,7 +63,7 @@ int main(int argc, char** argv)
   demo::add_number(app, "--periods", c.periods, "run length in reference periods (dynamic, if --end-time 0)", Allowed::positive(1e4));
   demo::add_number(app, "--end-time", c.end_time, "end time [s]", Allowed::positive(100.0).or_value(0.0, "automatic"));
   demo::add_number(app, "--dt", c.dt, "time step [s]", Allowed::positive(1.0).or_value(0.0, "safety factor x critical"));
-  demo::add_number(app, "--safety-factor", c.safety, "fraction of the critical time step [-]", Allowed::above(0.0, 1.0));
+  demo::add_number(app, "--safety-factor", c.safety, "fraction of the critical time step (a power-iteration estimate, from below) [-]", Allowed::above(0.0, 0.95));
   demo::add_number(app, "--damping", c.damping, "mass-proportional damping c [1/s]",
                    Allowed::non_negative(1e9).or_value(-1.0, "automatic (0 dynamic, 2 omega_1 static)"));
   demo::add_choice(app, "--solver", c.solver, "static-tip", "explicit | direct | both");
