@@ -1,5 +1,6 @@
 // Bonded assemblies: links, Newton's third law, objectivity, energy
 // conservation, breakage into contacts, time step, bad input.
+#include <algorithm>
 #include "dembridge/dem/assembly.h"
 #include "dembridge/dem/skin.h"
 #include "dembridge/dem/solver.h"
@@ -869,5 +870,54 @@ TEST_CASE("threads: the same run bit for bit on 1, 2 and 3 threads, links breaki
     CHECK(r.breakage == one.breakage);
     CHECK(r.friction == one.friction);
     CHECK(r.damping == one.damping);
+  }
+}
+
+TEST_CASE("floppy spheres: links on one line leave a motion of zero energy", "[dem]")
+{
+  // A sphere bonded to two neighbours can turn about the line through its
+  // two contact points, its centre moving: the links (forces at contact
+  // points, no moment) see no deformation. The linearised stiffness gives
+  // that motion zero force (to round-off against the stiffness times the
+  // motion); a third neighbour off the line resists it.
+  const double R = 1e-3;
+  auto make = [&](bool third)
+  {
+    std::vector<double> x{0, 0, 0, 2 * R, 0, 0, 0, 2 * R, 0};
+    if (third)
+      x.insert(x.end(), {0, 0, 2 * R});
+    std::vector<double> r(x.size() / 3, R);
+    return make_particles(x, r, 2400.0, 0.6);
+  };
+  for (bool third : {false, true})
+  {
+    INFO((third ? "three" : "two") << " links on sphere 0");
+    auto p = make(third);
+    auto l = create_links(p, 1.01, concrete());
+    const auto floppy = floppy_spheres(p, l);
+    // sphere 0 floppy with two links; its neighbours (one link each) always
+    const bool zero_floppy = std::find(floppy.begin(), floppy.end(), 0) != floppy.end();
+    CHECK(zero_floppy == !third);
+    CHECK(floppy.size() == 3);
+    // the turning mode of sphere 0 about the line through (R, 0, 0), (0, R, 0)
+    const std::size_t n = p.size();
+    const double c1[3] = {R, 0, 0}, c2[3] = {0, R, 0};
+    const double th[3] = {(c2[0] - c1[0]) / R, (c2[1] - c1[1]) / R, (c2[2] - c1[2]) / R}; // [rad]
+    std::vector<double> z(6 * n, 0.0), f(6 * n);
+    // u = theta x (x_0 - c1) = theta x (-c1)
+    z[0] = th[1] * (-c1[2]) - th[2] * (-c1[1]);
+    z[1] = th[2] * (-c1[0]) - th[0] * (-c1[2]);
+    z[2] = th[0] * (-c1[1]) - th[1] * (-c1[0]);
+    for (int c = 0; c < 3; ++c)
+      z[3 * n + c] = th[c];
+    stiffness_action(p, l, z, f);
+    double fmax = 0.0;
+    for (double v : f)
+      fmax = std::max(fmax, std::abs(v));
+    const double scale = l.kn[0] * R; // a link's force for a motion of R
+    if (third)
+      CHECK(fmax > 0.1 * scale);
+    else
+      CHECK(fmax < 1e-12 * scale);
   }
 }

@@ -1,3 +1,4 @@
+#include <array>
 #include "dembridge/dem/assembly.h"
 #include "dembridge/dem/neighbours.h"
 
@@ -131,6 +132,55 @@ void for_pairs_within(std::span<const double> x, std::span<const double> r, doub
   }
 }
 } // namespace
+
+std::vector<std::int32_t> floppy_spheres(const Particles& p, const Links& l, double tol)
+{
+  // each sphere's contact points, relative to its centre
+  const std::size_t n = p.size();
+  std::vector<std::vector<std::array<double, 3>>> pts(n);
+  for (std::size_t k = 0; k < l.size(); ++k)
+  {
+    if (l.state[k] != LinkState::intact)
+      continue;
+    const std::int32_t a = l.a[k], b = l.b[k];
+    double d[3];
+    for (int c = 0; c < 3; ++c)
+      d[c] = p.x[3 * b + c] - p.x[3 * a + c];
+    const double ra = p.r[a] / (p.r[a] + p.r[b]), rb = p.r[b] / (p.r[a] + p.r[b]);
+    pts[a].push_back({ra * d[0], ra * d[1], ra * d[2]});
+    pts[b].push_back({-rb * d[0], -rb * d[1], -rb * d[2]});
+  }
+  std::vector<std::int32_t> out;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const auto& q = pts[i];
+    bool line = true; // all points on the line through q[0] and the farthest from it
+    if (q.size() >= 3)
+    {
+      std::size_t far = 1;
+      double dmax = 0.0;
+      for (std::size_t j = 1; j < q.size(); ++j)
+      {
+        double s2 = 0.0;
+        for (int c = 0; c < 3; ++c)
+          s2 += (q[j][c] - q[0][c]) * (q[j][c] - q[0][c]);
+        if (s2 > dmax)
+          dmax = s2, far = j;
+      }
+      const double e[3] = {q[far][0] - q[0][0], q[far][1] - q[0][1], q[far][2] - q[0][2]};
+      for (std::size_t j = 1; j < q.size() && line; ++j)
+      {
+        const double w[3] = {q[j][0] - q[0][0], q[j][1] - q[0][1], q[j][2] - q[0][2]};
+        const double cx = e[1] * w[2] - e[2] * w[1], cy = e[2] * w[0] - e[0] * w[2], cz = e[0] * w[1] - e[1] * w[0];
+        // |e x w| / |e| is w's distance from the line
+        line = cx * cx + cy * cy + cz * cz <= tol * tol * dmax * dmax;
+      }
+    }
+    if (line)
+      out.push_back(static_cast<std::int32_t>(i));
+  }
+  return out;
+}
 
 Links create_links(const Particles& p, double lambda, const Material& mat)
 {

@@ -284,6 +284,7 @@ private:
       solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
     _p = dem::make_particles(pk.x, pk.r, _mat.density, solid / region.volume);
     _links = dem::create_links(_p, dem::lambda_for_bulk_links(region, _p.x, _p.r, _mf.links_per_sphere), _mat);
+    _floppy = dem::floppy_spheres(_p, _links).size();
     if (_c.skin_compensation)
     {
       // the faces' skin, two Rmax deep, stiffened to the bulk's links per
@@ -505,6 +506,7 @@ private:
                           {"regime", _c.regime},
                           {"particles", _p.size()},
                           {"links", _links.size()},
+                          {"floppy_spheres", _floppy},
                           {"shell_nodes", _use_fe ? _fe->num_nodes() : 0},
                           {"youngs_modulus_pa", _E},
                           {"poisson_ratio", _nu},
@@ -646,6 +648,7 @@ private:
   dem::Particles _p;
   dem::Links _links;
   dem::SkinCompensation _skin;
+  std::size_t _floppy = 0; // spheres free to turn (dem::floppy_spheres)
   std::unique_ptr<shell::ExplicitSolver> _fe_alone;
   std::unique_ptr<bridge::CoupledSolver> _coupled;
   std::unique_ptr<dem::DemSolver> _de_alone;

@@ -26,6 +26,7 @@
 #include "dembridge/shell/output.h"
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -127,6 +128,10 @@ private:
       solid_volume += 4.0 / 3.0 * std::numbers::pi * r * r * r;
     _p = dem::make_particles(pk.x, pk.r, _mat.density, solid_volume / region.volume);
     _links = dem::create_links(_p, dem::lambda_for_bulk_links(region, _p.x, _p.r, _mf.links_per_sphere), _mat);
+    _floppy = dem::floppy_spheres(_p, _links);
+    if (!_floppy.empty())
+      std::cout << "# " << _floppy.size() << " spheres have their links on one line (dem::floppy_spheres): "
+                << "free to turn about it, left out of the tip's mean\n";
   }
 
   void couple()
@@ -213,8 +218,11 @@ private:
       }
     }
     _s->start(u, v);
+    // the tip: the spheres within 2 mean radii of the free end, but those
+    // whose links leave them free to turn (they drift, without a force)
     for (std::size_t i = 0; i < _p.size(); ++i)
-      if (_p.x0[3 * i] > _c.length - 2.0 * _c.mean_radius)
+      if (_p.x0[3 * i] > _c.length - 2.0 * _c.mean_radius
+          && !std::binary_search(_floppy.begin(), _floppy.end(), static_cast<std::int32_t>(i)))
         _tip.push_back(static_cast<std::int32_t>(i));
   }
 
@@ -286,6 +294,7 @@ private:
     return {{"load", _c.load},
             {"fe", _c.fe_kind},
             {"particles", _p.size()},
+            {"floppy_spheres", _floppy.size()},
             {"shell_nodes", _fe->num_nodes()},
             {"constrained_particles", s.constrained()},
             {"placed_by_nearest_rule", s.coupling().outside()},
@@ -314,7 +323,7 @@ private:
   dem::Links _links;
   std::unique_ptr<bridge::CoupledSolver> _s; // after what it holds
   double _f_ref = 0.0;
-  std::vector<std::int32_t> _tip;
+  std::vector<std::int32_t> _tip, _floppy;
   std::unique_ptr<shell::XdmfWriter> _shell_out;
   std::unique_ptr<dem::ParticleWriter> _part_out;
   std::ofstream _csv;

@@ -290,6 +290,7 @@ private:
     _out["shape"] = _cfg.shape;
     _out["particles"] = _p.size();
     _out["links"] = _links.size();
+    _out["floppy_spheres"] = floppy_spheres(_p, _links).size();
     _out["ligament"] = _cfg.ligament;
     _out["lambda"] = _lambda;
     _out["mean_links_per_particle"] = 2.0 * _links.size() / _p.size();

@@ -117,6 +117,18 @@ inline double link_surface(const Particles& p, const Links& l, std::size_t k)
 /// stiffnesses from equation [1]. @throws std::runtime_error if lambda < 1.
 Links create_links(const Particles& p, double lambda, const Material& mat);
 
+/// Spheres whose intact links leave them a motion of zero energy: a link
+/// acts at one contact point (forces only, no moment), so a sphere whose
+/// contact points all lie on one line can turn about that line -- one link
+/// (turning about its point), two links (about the line through their two
+/// points), or more on one line -- with its neighbours at rest, and, once set
+/// turning, drifts steadily. (A free-surface sphere left with two close
+/// neighbours is the usual case.) No sphere has none: ids of those with no
+/// intact link are included. Contact points are at l_a = D R_a / (R_a + R_b)
+/// from the centre; "on one line" within `tol` of the largest distance
+/// between them, relative.
+std::vector<std::int32_t> floppy_spheres(const Particles& p, const Links& l, double tol = 1e-6);
+
 /// Number of pairs with D <= lambda (R_a + R_b) for each lambda in `lambdas`.
 std::vector<std::size_t> count_pairs(std::span<const double> x, std::span<const double> r,
                                      std::span<const double> lambdas);
