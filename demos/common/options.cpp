@@ -91,7 +91,6 @@ std::string with_allowed(std::string help, const Allowed& a)
   return help + " [allowed: " + a.text() + "]";
 }
 
-std::string error_text(const std::error_code& ec) { return ec.message(); }
 } // namespace
 
 std::string Allowed::text() const
@@ -107,52 +106,55 @@ std::string Allowed::text() const
   return t;
 }
 
+namespace
+{
+/// Any numeric option (a scalar or a list of them): the allowed set in its
+/// help, each value checked (and, for integers, written in a form CLI11
+/// converts: "1e3" -> "1000") when the command line is parsed.
+template <typename T>
+CLI::Option* add_checked(CLI::App& app, const std::string& name, T& value, std::string help,
+                         const Allowed& allowed, bool integer)
+{
+  return app.add_option(name, value, with_allowed(std::move(help), allowed))
+      ->transform(number_check(allowed, integer))
+      ->capture_default_str();
+}
+} // namespace
+
 CLI::Option* add_number(CLI::App& app, const std::string& name, double& value, std::string help,
                         const Allowed& allowed)
 {
-  return app.add_option(name, value, with_allowed(std::move(help), allowed))
-      ->check(number_check(allowed, false))
-      ->capture_default_str();
+  return add_checked(app, name, value, std::move(help), allowed, false);
 }
 
 CLI::Option* add_integer(CLI::App& app, const std::string& name, int& value, std::string help,
                          const Allowed& allowed)
 {
-  return app.add_option(name, value, with_allowed(std::move(help), allowed))
-      ->transform(number_check(allowed, true))
-      ->capture_default_str();
+  return add_checked(app, name, value, std::move(help), allowed, true);
 }
 
 CLI::Option* add_integer(CLI::App& app, const std::string& name, unsigned& value, std::string help,
                          const Allowed& allowed)
 {
-  return app.add_option(name, value, with_allowed(std::move(help), allowed))
-      ->transform(number_check(allowed, true))
-      ->capture_default_str();
+  return add_checked(app, name, value, std::move(help), allowed, true);
 }
 
 CLI::Option* add_integers(CLI::App& app, const std::string& name, std::vector<int>& value, std::string help,
                           const Allowed& allowed)
 {
-  return app.add_option(name, value, with_allowed(std::move(help) + ", one or more", allowed))
-      ->transform(number_check(allowed, true))
-      ->capture_default_str();
+  return add_checked(app, name, value, std::move(help) + ", one or more", allowed, true);
 }
 
 CLI::Option* add_integers(CLI::App& app, const std::string& name, std::vector<long>& value, std::string help,
                           const Allowed& allowed)
 {
-  return app.add_option(name, value, with_allowed(std::move(help) + ", one or more", allowed))
-      ->transform(number_check(allowed, true))
-      ->capture_default_str();
+  return add_checked(app, name, value, std::move(help) + ", one or more", allowed, true);
 }
 
 CLI::Option* add_vector(CLI::App& app, const std::string& name, std::array<double, 3>& value, std::string help,
                         const Allowed& allowed)
 {
-  return app.add_option(name, value, with_allowed(std::move(help) + ", three numbers", allowed))
-      ->check(number_check(allowed, false))
-      ->capture_default_str();
+  return add_checked(app, name, value, std::move(help) + ", three numbers", allowed, false);
 }
 
 CLI::Option* add_choice(CLI::App& app, const std::string& name, std::string& value, std::string help,
@@ -229,7 +231,7 @@ CLI::Option* add_output_dir(CLI::App& app, const std::string& name, std::string&
       return "'" + s + "' exists and is not a folder";
     fs::create_directories(p, ec);
     if (ec)
-      return "cannot create the folder '" + s + "': " + error_text(ec);
+      return "cannot create the folder '" + s + "': " + ec.message();
     const fs::path probe = p / (".dembridge_write_check_" + std::to_string(::getpid()));
     {
       std::ofstream f(probe);
@@ -256,7 +258,7 @@ CLI::Option* add_output_file(CLI::App& app, const std::string& name, std::string
     {
       fs::create_directories(p.parent_path(), ec);
       if (ec)
-        return "cannot create the folder of '" + s + "': " + error_text(ec);
+        return "cannot create the folder of '" + s + "': " + ec.message();
     }
     const bool existed = fs::exists(p, ec);
     {
