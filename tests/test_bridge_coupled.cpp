@@ -13,6 +13,8 @@
 #include <numbers>
 #include <numeric>
 #include <random>
+#include <filesystem>
+#include <unistd.h>
 // after DOLFINx headers (INFO)
 #include <catch2/catch.hpp>
 
@@ -861,4 +863,61 @@ TEST_CASE("coupled step: skipping the full-step projection leaves the motion unc
     }
     CHECK(skipped.residual[299] < 1e-12);
   }
+}
+
+TEST_CASE("restart: a coupled run continued from a checkpoint is the uninterrupted run bit for bit",
+          "[bridge][coupled][restart]")
+{
+  // The damped coupled bar from its first axial mode's velocities: 300
+  // steps, or 140, a checkpoint, a new coupler set up alike and 160 more.
+  namespace fs = std::filesystem;
+  const fs::path file = fs::temp_directory_path() / ("dembridge-coupled-restart-" + std::to_string(::getpid()) + ".h5");
+  struct Run
+  {
+    Bar b = make_bar(shell::Cell::quadrilateral);
+    std::unique_ptr<bridge::CoupledSolver> s;
+    Run()
+    {
+      bridge::CouplingOptions o;
+      o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
+      o.damping_fe = o.damping_de = 2000.0;
+      s = std::make_unique<bridge::CoupledSolver>(*b.fe, b.p, b.l, b.mat, o);
+      const int bs = b.fe->block_size();
+      const auto x = b.fe->node_coordinates();
+      s->fe().add_motion({"clamp", clamp_dofs(*b.fe, [](const auto& q) { return q[0] < 1e-9; }),
+                          shell::MotionKind::fixed, {}});
+      std::vector<double> u(b.fe->num_dofs(), 0.0), v(b.fe->num_dofs(), 0.0);
+      for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
+        v[bs * k] = 1e-3 * std::sin(0.5 * std::numbers::pi * x[3 * k] / 0.2);
+      for (std::size_t i = 0; i < b.p.size(); ++i)
+        b.p.v[3 * i] = 1e-3 * std::sin(0.5 * std::numbers::pi * b.p.x[3 * i] / 0.2);
+      s->start(u, v);
+    }
+  };
+  const int total = 300, at = 140;
+  Run whole;
+  for (int k = 0; k < total; ++k)
+    whole.s->step(k % 7 == 0);
+  {
+    Run first;
+    for (int k = 0; k < at; ++k)
+      first.s->step(k % 7 == 0);
+    auto f = checkpoint::File::create(file, "coupled test");
+    first.s->save(f.root().group("coupled"));
+    f.commit();
+  }
+  Run resumed;
+  resumed.s->load(checkpoint::File::open(file, "coupled test").root().group("coupled"));
+  for (int k = at; k < total; ++k)
+    resumed.s->step(k % 7 == 0);
+  fs::remove(file);
+  // exact comparisons on purpose: a restart must be bit for bit
+  CHECK(resumed.b.p.x == whole.b.p.x);
+  CHECK(resumed.b.p.v == whole.b.p.v);
+  auto vec = [](std::span<const double> s) { return std::vector<double>(s.begin(), s.end()); };
+  CHECK(vec(resumed.s->fe().u()) == vec(whole.s->fe().u()));
+  CHECK(vec(resumed.s->fe().v()) == vec(whole.s->fe().v()));
+  const auto a = whole.s->energy(), e = resumed.s->energy();
+  CHECK(e.total() == a.total());
+  CHECK(e.imbalance() == a.imbalance());
 }

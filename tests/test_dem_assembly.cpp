@@ -10,6 +10,10 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <unistd.h>
 
 using namespace dembridge::dem;
 using Catch::Contains;
@@ -920,4 +924,101 @@ TEST_CASE("floppy spheres: links on one line leave a motion of zero energy", "[d
     else
       CHECK(fmax < 1e-12 * scale);
   }
+}
+
+TEST_CASE("restart: a run continued from a checkpoint is the uninterrupted run bit for bit", "[dem][restart]")
+{
+  // The weak lattice of the threads test, pulled at the top, with a rotating
+  // loading plate on one side and a hinged displaced plate on the other:
+  // links break in tension and shear, contacts form and slide, the neighbour
+  // list is rebuilt, and every array of the state (histories, reactions,
+  // plates' fits) carries over the checkpoint.
+  namespace fs = std::filesystem;
+  const fs::path file = fs::temp_directory_path() / ("dembridge-dem-restart-" + std::to_string(::getpid()) + ".h5");
+  struct Run
+  {
+    Particles p = lattice(7, 11);
+    Material m = concrete();
+    Links l;
+    std::unique_ptr<DemSolver> s;
+    Run()
+    {
+      m.tensile = 0.5e6;
+      m.cohesion = 0.7e6;
+      l = create_links(p, 1.4, m);
+      s = std::make_unique<DemSolver>(p, l, m, 0.5 * critical_time_step(p, l), 50.0, 0.2e-3);
+      s->set_energy_guard(0.0); // overlapping lattice: see the threads test
+      auto in = [](double lo, double hi) { return [=](const auto& x) { return x[0] > lo && x[0] < hi && x[2] > 1e-3 && x[2] < 11e-3; }; };
+      s->add_motion({"bottom", DemSolver::select(p, [](const auto& x) { return x[2] < 1e-3; }, "bottom"),
+                     MotionKind::fixed, {true, true, true}, {}});
+      s->add_motion({"top", DemSolver::select(p, [](const auto& x) { return x[2] > 11e-3; }, "top"),
+                     MotionKind::velocity, {true, false, true}, [](double) { return 2.0; }});
+      s->add_motion({"hinge", DemSolver::select(p, in(-1.0, 1e-3), "left"), MotionKind::displacement,
+                     {true, false, false}, [](double t) { return -1e3 * t; }, true});
+      s->add_force({"plate", DemSolver::select(p, in(11e-3, 1.0), "right"), {1.0, 0.0, 0.0},
+                    [](double t) { return 2.0 + 1e4 * t; }, true, true});
+      s->start();
+    }
+  };
+  const int total = 400, at = 170;
+  Run whole;
+  for (int k = 0; k < total; ++k)
+    whole.s->step();
+  {
+    Run first;
+    for (int k = 0; k < at; ++k)
+      first.s->step();
+    auto f = dembridge::checkpoint::File::create(file, "dem test");
+    first.s->save(f.root().group("dem"));
+    f.commit();
+  }
+  Run resumed;
+  {
+    const auto f = dembridge::checkpoint::File::open(file, "dem test");
+    resumed.s->load(f.root().group("dem"));
+  }
+  REQUIRE(resumed.s->steps() == at);
+  for (int k = at; k < total; ++k)
+    resumed.s->step();
+  REQUIRE(whole.l.count(LinkState::broken_tension) > 0); // the test exercises breakage...
+  REQUIRE(whole.l.count(LinkState::broken_shear) > 0);
+  REQUIRE(whole.s->energy().friction > 0.0);            // ...sliding contacts
+  REQUIRE(whole.s->neighbours().builds() > 1);          // ...and rebuilds
+  // exact comparisons on purpose: a restart must be bit for bit
+  CHECK(resumed.p.x == whole.p.x);
+  CHECK(resumed.p.v == whole.p.v);
+  CHECK(resumed.p.w == whole.p.w);
+  CHECK(resumed.p.f == whole.p.f);
+  CHECK(resumed.l.state == whole.l.state);
+  CHECK(resumed.l.fs == whole.l.fs);
+  CHECK(resumed.s->neighbours().fs == whole.s->neighbours().fs);
+  CHECK(resumed.s->time() == whole.s->time());
+  const DemEnergy a = whole.s->energy(), b = resumed.s->energy();
+  CHECK(b.breakage == a.breakage);
+  CHECK(b.friction == a.friction);
+  CHECK(b.damping == a.damping);
+  CHECK(b.external_work == a.external_work);
+  CHECK(b.prescribed_work == a.prescribed_work);
+  for (const char* c : {"bottom", "top", "hinge"})
+    CHECK(resumed.s->reaction(c) == whole.s->reaction(c));
+
+  SECTION("a checkpoint of another assembly, program or file is refused, naming it")
+  {
+    Particles q = lattice(7, 12); // other radii
+    Links lq = create_links(q, 1.4, concrete());
+    DemSolver other(q, lq, concrete(), 0.5 * critical_time_step(q, lq), 50.0, 0.2e-3);
+    other.add_motion({"bottom", DemSolver::select(q, [](const auto& x) { return x[2] < 1e-3; }, "bottom"),
+                      MotionKind::fixed, {true, true, true}, {}});
+    other.start();
+    const auto f = dembridge::checkpoint::File::open(file, "dem test");
+    CHECK_THROWS_WITH(other.load(f.root().group("dem")), Contains("/dem/dt") || Contains("/dem/motions")
+                                                             || Contains("/dem/particles/r"));
+    CHECK_THROWS_WITH(dembridge::checkpoint::File::open(file, "bar"), Contains("written by dem test, not by bar"));
+    CHECK_THROWS_WITH(dembridge::checkpoint::File::open(file.string() + ".none", "dem test"), Contains("no such file"));
+    const fs::path text = file.string() + ".txt";
+    { std::ofstream(text) << "x y z r\n"; }
+    CHECK_THROWS_WITH(dembridge::checkpoint::File::open(text, "dem test"), Contains("not an HDF5 file"));
+    fs::remove(text);
+  }
+  fs::remove(file);
 }

@@ -315,3 +315,27 @@ CoupledEnergy CoupledSolver::energy() const
 }
 
 } // namespace dembridge::bridge
+
+namespace dembridge::bridge
+{
+
+void CoupledSolver::save(const checkpoint::Group& g) const
+{
+  _fe_solver->save(g.group("shell"));
+  _de_solver->save(g.group("dem"));
+  g.write("multiplier_energy", _multiplier_energy);
+  g.write("residual", _residual);
+  g.write("dt", _dt);
+}
+
+void CoupledSolver::load(const checkpoint::Group& g)
+{
+  if (g.read_double("dt") != _dt)
+    g.fail("dt", "the coupled time step differs from this run's");
+  _fe_solver->load(g.group("shell"));
+  _de_solver->load(g.group("dem"));
+  _multiplier_energy = g.read_double("multiplier_energy");
+  _residual = g.read_double("residual");
+}
+
+} // namespace dembridge::bridge

@@ -129,6 +129,14 @@ public:
   CoupledEnergy energy() const;
   const CoupledTimings& timings() const { return _time; }
 
+  /// Writes the coupled state after a step: both sides (groups "shell" and
+  /// "dem", as their solvers' save()) and the multipliers' work.
+  void save(const checkpoint::Group& g) const;
+  /// Reads a state written by save() into a coupler set up as the one that
+  /// wrote it (after start()): the run continues bit for bit.
+  /// @throws std::runtime_error naming what differs.
+  void load(const checkpoint::Group& g);
+
 private:
   // set-up phases of the constructor, in order
   static void validate(const CouplingOptions& o);

@@ -6,6 +6,7 @@
 /// sphere has moved more than half the skin since the last build.
 
 #include "dembridge/dem/assembly.h"
+#include "dembridge/core/checkpoint.h"
 
 #include <cstdint>
 #include <span>
@@ -100,6 +101,10 @@ public:
   double skin() const { return _skin; }
   /// Bytes held by the list.
   std::size_t bytes() const;
+  /// The pairs, their contact history and the build state, to a checkpoint.
+  void save(const checkpoint::Group& g) const;
+  /// Reads what save() wrote (the skin must be the same).
+  void load(const checkpoint::Group& g);
 
   std::vector<std::int32_t> a, b;  ///< pairs, a < b, sorted
   std::vector<std::int32_t> link;  ///< index of the pair's (broken) link, or -1; never an intact one

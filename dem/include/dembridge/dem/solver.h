@@ -9,6 +9,7 @@
 #include "dembridge/dem/conditions.h"
 #include "dembridge/dem/forces.h"
 #include "dembridge/dem/neighbours.h"
+#include "dembridge/core/checkpoint.h"
 
 #include <array>
 #include <cstdint>
@@ -105,6 +106,16 @@ public:
   /// included; the particles and links are the caller's).
   std::size_t bytes() const;
   const DemTimings& timings() const { return _time; }
+
+  /// Writes the whole state at the end of a step (particles, links,
+  /// neighbour pairs and their contact history, time, energies, reactions)
+  /// into checkpoint group `g` (sub-groups particles, links, neighbours).
+  void save(const checkpoint::Group& g) const;
+  /// Reads a state written by save() into a solver set up as the one that
+  /// wrote it (same assembly, conditions, time step; after start()): the
+  /// run then continues bit for bit. @throws std::runtime_error naming
+  /// what differs (sphere radii, link ends, conditions, time step).
+  void load(const checkpoint::Group& g);
 
 private:
   void kick(double h);

@@ -6,6 +6,8 @@
 /// same integrator serves any model that provides a mass vector and an
 /// internal-force callback.
 
+#include "dembridge/core/checkpoint.h"
+
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -148,6 +150,15 @@ public:
   /// the share below 1e-3 here; margin 0 turns the guard off. Default 0.5,
   /// every 100 steps.
   void set_energy_guard(double margin, std::int64_t every = 100);
+
+  /// Writes the state at the end of a step (u, v, a, forces, reactions,
+  /// time, energies) into checkpoint group `g`.
+  void save(const checkpoint::Group& g) const;
+  /// Reads a state written by save() into a solver set up as the one that
+  /// wrote it (same masses, motions, loads, time step; after set_state):
+  /// the run then continues bit for bit. @throws std::runtime_error naming
+  /// what differs.
+  void load(const checkpoint::Group& g);
 
 private:
   void external_forces(double t, std::span<double> f) const;

@@ -1,0 +1,217 @@
+// Checkpoint and restart of the DEM: the particles, links, neighbour list
+// and solver state written to a checkpoint group and read back bit for bit
+// (checkpoint.h).
+#include "dembridge/dem/solver.h"
+
+#include <stdexcept>
+
+#include "force_loop.h"
+
+namespace dembridge::dem
+{
+namespace
+{
+using checkpoint::Group;
+
+/// Reads `name` into v, which must keep its length (the run's set-up).
+template <typename T> void read_same_size(const Group& g, const std::string& name, std::vector<T>& v)
+{
+  std::vector<T> r;
+  g.read(name, r);
+  if (r.size() != v.size())
+    g.fail(name, "holds " + std::to_string(r.size()) + " values, this run has " + std::to_string(v.size())
+                     + " (the checkpoint is of another set-up)");
+  v = std::move(r);
+}
+
+/// Fails unless the stored `name` equals v: what the set-up fixes (radii,
+/// link ends) identifies the assembly the checkpoint belongs to.
+template <typename T> void check_same(const Group& g, const std::string& name, const std::vector<T>& v)
+{
+  std::vector<T> r;
+  g.read(name, r);
+  if (r != v)
+    g.fail(name, "differs from this run's (the checkpoint is of another assembly: restart with the "
+                 "options of the run that wrote it)");
+}
+
+void save_particles(const Group& g, const Particles& p)
+{
+  g.write("x", p.x);
+  g.write("x0", p.x0);
+  g.write("v", p.v);
+  g.write("w", p.w);
+  g.write("f", p.f);
+  g.write("t", p.t);
+  g.write("r", p.r);
+  g.write("m", p.m);
+  g.write("inertia", p.inertia);
+  g.write("weight", p.weight);
+  g.write("quantum", p.quantum);
+}
+
+void load_particles(const Group& g, Particles& p)
+{
+  check_same(g, "r", p.r);
+  for (auto [name, v] : {std::pair{"x", &p.x}, {"x0", &p.x0}, {"v", &p.v}, {"w", &p.w}, {"f", &p.f},
+                         {"t", &p.t}, {"m", &p.m}, {"inertia", &p.inertia}, {"weight", &p.weight}})
+    read_same_size(g, name, *v);
+  if (g.read_double("quantum") != p.quantum)
+    g.fail("quantum", "differs from this run's (another assembly)");
+}
+
+void save_links(const Group& g, const Links& l)
+{
+  g.write("a", l.a);
+  g.write("b", l.b);
+  g.write("d0", l.d0);
+  g.write("kn", l.kn);
+  g.write("ks", l.ks);
+  g.write("fs", l.fs);
+  g.write("n", l.n);
+  g.write("delta_max", l.delta_max);
+  std::vector<std::uint8_t> state(l.size());
+  for (std::size_t k = 0; k < l.size(); ++k)
+    state[k] = static_cast<std::uint8_t>(l.state[k]);
+  g.write("state", state);
+  g.write("weight", l.weight);
+}
+
+void load_links(const Group& g, Links& l)
+{
+  check_same(g, "a", l.a);
+  check_same(g, "b", l.b);
+  check_same(g, "d0", l.d0);
+  for (auto [name, v] : {std::pair{"kn", &l.kn}, {"ks", &l.ks}, {"fs", &l.fs}, {"n", &l.n},
+                         {"delta_max", &l.delta_max}, {"weight", &l.weight}})
+    read_same_size(g, name, *v);
+  std::vector<std::uint8_t> state;
+  g.read("state", state);
+  if (state.size() != l.size())
+    g.fail("state", "not one value per link");
+  for (std::size_t k = 0; k < l.size(); ++k)
+  {
+    if (state[k] > static_cast<std::uint8_t>(LinkState::broken_shear))
+      g.fail("state", "value " + std::to_string(state[k]) + " is no link state");
+    l.state[k] = static_cast<LinkState>(state[k]);
+  }
+}
+} // namespace
+
+// ---- NeighbourList --------------------------------------------------------------
+
+void NeighbourList::save(const Group& g) const
+{
+  g.write("a", a);
+  g.write("b", b);
+  g.write("link", link);
+  g.write("fs", fs);
+  g.write("n", n);
+  g.write("touching", touching);
+  g.write("x_build", _x_build);
+  g.write_int("builds", static_cast<std::int64_t>(_builds));
+  g.write_int("version", static_cast<std::int64_t>(_version));
+  g.write("skin", _skin);
+}
+
+void NeighbourList::load(const Group& g)
+{
+  if (g.read_double("skin") != _skin)
+    g.fail("skin", "differs from this run's skin " + std::to_string(_skin) + " m");
+  g.read("a", a);
+  g.read("b", b);
+  g.read("link", link);
+  g.read("fs", fs);
+  g.read("n", n);
+  g.read("touching", touching);
+  g.read("x_build", _x_build);
+  const std::size_t m = a.size();
+  if (b.size() != m || link.size() != m || fs.size() != 3 * m || n.size() != 3 * m || touching.size() != m)
+    g.fail("a", "the pair arrays have inconsistent lengths (file damaged?)");
+  _builds = static_cast<std::size_t>(g.read_int("builds"));
+  _version = static_cast<std::size_t>(g.read_int("version"));
+}
+
+// ---- DemSolver ------------------------------------------------------------------
+
+void DemSolver::save(const Group& g) const
+{
+  if (_in_step)
+    throw std::runtime_error("DemSolver::save between begin_step and end_step: save at the end of a step");
+  save_particles(g.group("particles"), _p);
+  save_links(g.group("links"), _l);
+  _nl.save(g.group("neighbours"));
+  g.write("time", _t);
+  g.write_int("steps", _steps);
+  g.write("dt", _dt);
+  g.write("damping", _c);
+  const std::vector<double> e{_e.initial,  _e.kinetic, _e.elastic, _e.softening, _e.breakage,
+                              _e.friction, _e.damping, _e.external_work, _e.prescribed_work};
+  g.write("energy", e);
+  const std::vector<double> c{_counters.friction, _counters.breakage, _counters.cohesion_demand,
+                              _counters.track_cohesion ? 1.0 : 0.0};
+  g.write("counters", c);
+  std::string names;
+  for (const auto& m : _motions)
+    names += m.name + '\n';
+  g.write("motions", names);
+  for (auto [name, v] : {std::pair{"fext", &_fext}, {"fext_old", &_fext_old}, {"reactions", &_reac},
+                         {"f_old", &_fold}, {"v_old", &_vold}})
+    g.write(name, *v);
+  std::vector<double> hinged;
+  for (std::size_t q = 0; q < _motions.size(); ++q)
+    for (int k = 0; k < 3; ++k)
+    {
+      hinged.push_back(_motion_reac[q][k]);
+      hinged.push_back(_motion_vprev[q][k]);
+    }
+  g.write("hinged", hinged);
+}
+
+void DemSolver::load(const Group& g)
+{
+  if (_in_step)
+    throw std::runtime_error("DemSolver::load between begin_step and end_step");
+  if (g.read_double("dt") != _dt)
+    g.fail("dt", "the time step " + std::to_string(g.read_double("dt")) + " s differs from this run's "
+                     + std::to_string(_dt) + " s");
+  std::string names;
+  for (const auto& m : _motions)
+    names += m.name + '\n';
+  if (g.read_string("motions") != names)
+    g.fail("motions", "the boundary conditions differ from this run's (another set-up, or a condition "
+                      "released: load the state once the run's conditions are those of the checkpoint)");
+  load_particles(g.group("particles"), _p);
+  load_links(g.group("links"), _l);
+  _nl.load(g.group("neighbours"));
+  _t = g.read_double("time");
+  _steps = g.read_int("steps");
+  _c = g.read_double("damping");
+  std::vector<double> e, c;
+  g.read("energy", e);
+  g.read("counters", c);
+  if (e.size() != 9 || c.size() != 4)
+    g.fail("energy", "unexpected length (file damaged?)");
+  _e = {e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8]};
+  _counters.friction = c[0];
+  _counters.breakage = c[1];
+  _counters.cohesion_demand = c[2];
+  _counters.track_cohesion = c[3] != 0.0;
+  for (auto [name, v] : {std::pair{"fext", &_fext}, {"fext_old", &_fext_old}, {"reactions", &_reac},
+                         {"f_old", &_fold}, {"v_old", &_vold}})
+    read_same_size(g, name, *v);
+  std::vector<double> hinged;
+  g.read("hinged", hinged);
+  if (hinged.size() != 6 * _motions.size())
+    g.fail("hinged", "not 6 values per condition");
+  for (std::size_t q = 0; q < _motions.size(); ++q)
+    for (int k = 0; k < 3; ++k)
+    {
+      _motion_reac[q][k] = hinged[6 * q + 2 * k];
+      _motion_vprev[q][k] = hinged[6 * q + 2 * k + 1];
+    }
+  // the force loop's index structures are rebuilt for the loaded pairs
+  _scratch = std::make_unique<ForceScratch>();
+}
+
+} // namespace dembridge::dem
