@@ -24,6 +24,7 @@ namespace dembridge::demo
 namespace
 {
 volatile std::sig_atomic_t stop_signal = 0;
+std::filesystem::path checkpoint_file; // the last checkpoint written
 
 extern "C" void on_stop_signal(int sig)
 {
@@ -47,6 +48,8 @@ void warn_threads()
 } // namespace
 
 bool stop_requested() { return stop_signal != 0; }
+
+void note_checkpoint(const std::filesystem::path& file) { checkpoint_file = file; }
 
 Interrupted::Interrupted(double t, int sig)
     : std::runtime_error("interrupted by " + std::string(sig == SIGTERM ? "SIGTERM" : "SIGINT") + " at t = "
@@ -78,13 +81,19 @@ int run_guarded(int argc, char** argv, const std::function<void()>& body, const 
   {
     std::cerr << "error: " << e.what() << ": stopped at the end of that step; the output files hold the run up "
                  "to there" << std::endl;
+    if (!checkpoint_file.empty())
+      std::cerr << "checkpoint: " << checkpoint_file.string() << " (continue with --restart "
+                << checkpoint_file.string() << ")" << std::endl;
     rc = 128 + e.signal;
     if (!summary.empty())
       try
       {
-        write_json(summary, {{"completed", false},
-                             {"time_reached_s", e.time},
-                             {"signal", e.signal == SIGTERM ? "SIGTERM" : "SIGINT"}});
+        nlohmann::json j{{"completed", false},
+                         {"time_reached_s", e.time},
+                         {"signal", e.signal == SIGTERM ? "SIGTERM" : "SIGINT"}};
+        if (!checkpoint_file.empty())
+          j["checkpoint"] = checkpoint_file.string();
+        write_json(summary, j);
       }
       catch (const std::exception& w)
       {

@@ -45,6 +45,10 @@ struct Interrupted : std::runtime_error
 /// out (their writers' destructors), so what was written stays readable.
 void check_stop(double t_reached);
 
+/// Records that a checkpoint was written to `file`: an interrupted run's
+/// summary and message then name it.
+void note_checkpoint(const std::filesystem::path& file);
+
 /// Writes a run's summary with "completed": true.
 void write_summary(const std::filesystem::path& file, nlohmann::json j);
 

@@ -15,6 +15,7 @@
 // Output: DIR/shell.xdmf (FE fields), DIR/particles.xdmf (spheres), DIR/history.csv.
 #include "cantilever.h"
 #include "options.h"
+#include "restart.h"
 #include "support.h"
 
 #include "dembridge/bridge/coupled.h"
@@ -45,6 +46,7 @@ struct CoupledCantileverConfig
   double amplitude = 1e-6, periods = 2.0, safety = 0.8;
   int nx = 12, ny = 5, nz = 5, frames = 20;
   unsigned seed = 1;
+  demo::RestartOptions restart;
 };
 
 /// The run in its phases: checks, the materials, the shell and the DE
@@ -65,7 +67,11 @@ public:
     couple();
     reference();
     clamp_and_start();
-    open_output();
+    _ckpt = std::make_unique<demo::Checkpointer>(_c.restart, _c.output);
+    if (_ckpt->restarting())
+      resume();
+    else
+      open_output();
     march();
     return summary();
   }
@@ -238,6 +244,50 @@ private:
     _csv << "t_s,tip_m,fe_kinetic_j,fe_strain_j,de_kinetic_j,de_elastic_j,total_j,imbalance_j,residual\n";
   }
 
+  /// Continues from the checkpoint: both sides and the coupling, the tip
+  /// history, the output files up to the checkpoint.
+  void resume()
+  {
+    const auto file = _ckpt->open_restart();
+    const auto root = file.root();
+    _s->load(root.group("coupled"));
+    const auto run = root.group("run");
+    run.read("t", _ts);
+    run.read("tip", _tips);
+    std::vector<double> tracked;
+    run.read("tracked", tracked);
+    if (tracked.size() != 3 || _ts.empty() || _ts.size() != _tips.size())
+      run.fail("tracked", "not the history of this run (file damaged?)");
+    _e0 = tracked[0];
+    _worst = tracked[1];
+    _drift = tracked[2];
+    _restarted_from = _s->fe().steps();
+    if (_c.output.empty())
+      return;
+    const std::filesystem::path dir(_c.output);
+    _shell_out = std::make_unique<shell::XdmfWriter>(*_fe, dir / "shell.xdmf", root.group("shell_xdmf"));
+    _part_out = std::make_unique<dem::ParticleWriter>(dir / "particles.xdmf", _links, _p.size(), false,
+                                                      root.group("particles_xdmf"));
+    demo::reopen_text(_csv, dir / "history.csv", run.read_int("csv_bytes"));
+  }
+
+  /// The checkpoint: the coupled state, the tip history, the output files' extent.
+  void save(const checkpoint::Group& root)
+  {
+    _s->save(root.group("coupled"));
+    const auto run = root.group("run");
+    run.write("t", _ts);
+    run.write("tip", _tips);
+    run.write("tracked", std::vector<double>{_e0, _worst, _drift});
+    if (_shell_out)
+    {
+      _shell_out->save(root.group("shell_xdmf"));
+      _part_out->save(root.group("particles_xdmf"));
+    }
+    if (_csv.is_open())
+      run.write_int("csv_bytes", demo::flushed_size(_csv, std::filesystem::path(_c.output) / "history.csv"));
+  }
+
   // ---- run ------------------------------------------------------------------
   double tip_value() const
   {
@@ -269,12 +319,15 @@ private:
   {
     _nsteps = static_cast<std::int64_t>(std::ceil(_c.periods / _f_ref / _s->dt()));
     _every = std::max<std::int64_t>(1, _nsteps / std::max(1, _c.frames));
-    _ts = {0.0};
-    _tips = {tip_value()};
-    _e0 = _s->energy().total();
     std::cout << "     t [s]      tip [m]   total E [J]  imbalance [J]   residual [m/s]\n";
-    write_frame(0, 0.0); // the initial state, a frame at t = 0
-    for (std::int64_t k = 1; k <= _nsteps; ++k)
+    if (_ts.empty()) // a new run (a restarted one has its history)
+    {
+      _ts = {0.0};
+      _tips = {tip_value()};
+      _e0 = _s->energy().total();
+      write_frame(0, 0.0); // the initial state, a frame at t = 0
+    }
+    for (std::int64_t k = _s->fe().steps() + 1; k <= _nsteps; ++k)
     {
       const double r = _s->step();
       _worst = std::max(_worst, r);
@@ -282,7 +335,7 @@ private:
       _tips.push_back(tip_value());
       if (k % _every == 0 || k == _nsteps)
         write_frame(k, r);
-      demo::check_stop(_ts.back());
+      _ckpt->end_of_step(k, _ts.back(), [this](const checkpoint::Group& g) { save(g); });
     }
   }
 
@@ -291,7 +344,7 @@ private:
   {
     const auto& s = *_s;
     const double f = demo::crossing_frequency(_ts, _tips);
-    return {{"load", _c.load},
+    nlohmann::json out{{"load", _c.load},
             {"fe", _c.fe_kind},
             {"particles", _p.size()},
             {"floppy_spheres", _floppy.size()},
@@ -309,6 +362,9 @@ private:
             {"dt_fe_s", s.dt_fe()},
             {"steps", _nsteps},
             {"wall_s", _clock.seconds()}};
+    if (_restarted_from >= 0)
+      out["restarted_from_step"] = _restarted_from;
+    return out;
   }
 
   // ---- state ----------------------------------------------------------------
@@ -330,6 +386,8 @@ private:
   std::int64_t _nsteps = 0, _every = 1;
   std::vector<double> _ts, _tips;
   double _e0 = 0.0, _worst = 0.0, _drift = 0.0;
+  std::unique_ptr<demo::Checkpointer> _ckpt;
+  std::int64_t _restarted_from = -1;
 };
 } // namespace
 
@@ -360,8 +418,10 @@ int main(int argc, char** argv)
   demo::add_integer(app, "--frames", c.frames, "output frames", Allowed::closed(1, 100000));
   demo::add_output_dir(app, "--output", c.output, "output folder; empty = none");
   demo::add_output_file(app, "--summary", c.summary, "write key results as JSON to this file");
+  demo::add_restart_options(app, c.restart);
   if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
     return rc;
+  demo::record_setup(app, c.restart);
 
   return demo::run_guarded(argc, argv, [&]
   {

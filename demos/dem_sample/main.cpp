@@ -69,7 +69,7 @@ int main(int argc, char** argv)
                }
                catch (const std::exception& e)
                {
-                 throw CLI::ValidationError("--material", e.what());
+                 throw CLI::ValidationError(e.what());
                }
              });
   demo::add_number(app, "--links-per-sphere", c.links_per_sphere, "target mean number of links per sphere in the bulk",
@@ -103,8 +103,12 @@ int main(int argc, char** argv)
   demo::add_integer(app, "--frames", c.frames, "XDMF frames if the run goes to --max-strain", Allowed::closed(1, 100000));
   demo::add_output_dir(app, "--output", c.output_dir, "output folder (XDMF, CSV); empty = none");
   demo::add_output_file(app, "--summary", summary, "write key results as JSON to this file");
+  demo::RestartOptions restart;
+  demo::add_restart_options(app, restart);
   if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
     return rc;
+  demo::record_setup(app, restart);
+  c.restart = &restart;
 
   return demo::run_guarded(argc, argv, [&]
   {

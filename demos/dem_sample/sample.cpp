@@ -104,7 +104,12 @@ public:
     _solver->track_cohesion_demand();
     _solver->start();
     describe();
-    open_output();
+    if (_cfg.restart)
+      _ckpt = std::make_unique<Checkpointer>(*_cfg.restart, _cfg.output_dir);
+    if (_ckpt && _ckpt->restarting())
+      resume();
+    else
+      open_output();
     print_header();
     load();
     measure_moduli();
@@ -324,6 +329,55 @@ private:
             "work_j,imbalance_j,gauge_strain,top_reaction_n\n";
   }
 
+  /// Continues from the checkpoint: the solver's state, the curves and
+  /// what is tracked along them, and the output files up to the checkpoint.
+  void resume()
+  {
+    const auto file = _ckpt->open_restart();
+    const auto root = file.root();
+    _solver->load(root.group("dem"));
+    const auto run = root.group("run");
+    run.read("strain", _eps);
+    run.read("stress", _sig);
+    run.read("lateral_strain", _lat);
+    run.read("gauge_strain", _ax);
+    std::vector<double> tracked;
+    run.read("tracked", tracked);
+    if (tracked.size() != 7)
+      run.fail("tracked", "not the 7 values of the peak tracking (file damaged?)");
+    _peak = tracked[0];
+    _eps_peak = tracked[1];
+    _dissipated_at_peak = tracked[2];
+    _demand_at_peak = tracked[3];
+    _after_peak = tracked[4] != 0.0;
+    _separated = tracked[5] != 0.0;
+    _t_low = tracked[6];
+    _out["restarted_from_step"] = _solver->steps();
+    if (_cfg.output_dir.empty())
+      return;
+    const std::filesystem::path dir(_cfg.output_dir);
+    _writer = std::make_unique<ParticleWriter>(dir / "particles.xdmf", _links, _p.size(), true,
+                                               root.group("particles_xdmf"));
+    reopen_text(_csv, dir / "stress_strain.csv", run.read_int("csv_bytes"));
+  }
+
+  /// The checkpoint: the solver, the curves, the output files' extent.
+  void save(const checkpoint::Group& root)
+  {
+    _solver->save(root.group("dem"));
+    const auto run = root.group("run");
+    run.write("strain", _eps);
+    run.write("stress", _sig);
+    run.write("lateral_strain", _lat);
+    run.write("gauge_strain", _ax);
+    run.write("tracked", std::vector<double>{_peak, _eps_peak, _dissipated_at_peak, _demand_at_peak,
+                                             _after_peak ? 1.0 : 0.0, _separated ? 1.0 : 0.0, _t_low});
+    if (_writer)
+      _writer->save(root.group("particles_xdmf"));
+    if (_csv.is_open())
+      run.write_int("csv_bytes", flushed_size(_csv, std::filesystem::path(_cfg.output_dir) / "stress_strain.csv"));
+  }
+
   void print_header()
   {
     const double t_end = _max_strain / _cfg.strain_rate + _t_ramp / 2.0;
@@ -365,12 +419,15 @@ private:
     const std::int64_t sample_every = std::max<std::int64_t>(1, nsteps / 2000);
     const std::int64_t frame_every = std::max<std::int64_t>(1, nsteps / std::max(1, _cfg.frames));
     const std::int64_t print_every = std::max<std::int64_t>(1, nsteps / 20);
-    for (std::int64_t s = 1; s <= nsteps && !_after_peak; ++s)
+    for (std::int64_t s = _solver->steps() + 1; s <= nsteps && !_after_peak; ++s)
     {
       _solver->step();
       if (s % sample_every == 0 || s % frame_every == 0)
         measure(s % print_every == 0, s % frame_every == 0);
-      check_stop(_solver->time());
+      if (_ckpt)
+        _ckpt->end_of_step(s, _solver->time(), [this](const checkpoint::Group& g) { save(g); });
+      else
+        check_stop(_solver->time());
     }
     measure(true, true);
     if (_writer)
@@ -567,6 +624,7 @@ private:
          _v_top = 0.0, _t_ramp = 0.0;
   std::int64_t _nsteps = 0;
   std::unique_ptr<DemSolver> _solver;
+  std::unique_ptr<Checkpointer> _ckpt;
   // platens and gauges
   double _layer = 0.0, _half_width = 0.0, _gauge_length = 0.0;
   std::vector<std::int32_t> _bottom, _top, _gauge, _g_lo, _g_hi;

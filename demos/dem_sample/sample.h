@@ -14,6 +14,8 @@
 #include "dembridge/dem/assembly.h"
 #include "dembridge/dem/packing.h"
 
+#include "restart.h"
+
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -52,6 +54,8 @@ struct SampleConfig
   std::string output_dir;           ///< "" = no files
   int frames = 100;                 ///< XDMF frames if the run goes to max_strain
   bool quiet = false;
+  /// Checkpoints and restart (restart.h); null: neither.
+  const RestartOptions* restart = nullptr;
 };
 
 /// The sample's region: a cylinder of axis z (diameter, height) or a square

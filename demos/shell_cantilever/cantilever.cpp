@@ -68,7 +68,13 @@ public:
     resolve_time_step();
     set_up_solver();
     initial_shape();
-    open_output();
+    if (_cfg.restart)
+      _ckpt = std::make_unique<Checkpointer>(*_cfg.restart, _cfg.output_dir);
+    if (_ckpt && _ckpt->restarting())
+      resume();
+    else
+      open_output();
+    print_header();
     march();
     report();
     return _out;
@@ -311,6 +317,51 @@ private:
       _csv.open(dir / "history.csv");
       _csv << "t_s,tip_m,kinetic_J,strain_J,external_work_J,prescribed_work_J,damping_J,imbalance_J\n";
     }
+  }
+
+  /// Continues from the checkpoint: the solver, the tip history and what
+  /// is tracked along it, the output files up to the checkpoint.
+  void resume()
+  {
+    const auto file = _ckpt->open_restart();
+    const auto root = file.root();
+    _solver->load(root.group("shell"));
+    const auto run = root.group("run");
+    run.read("t", _ts);
+    run.read("tip", _tipv);
+    std::vector<double> tracked;
+    run.read("tracked", tracked);
+    if (tracked.size() != 5 || _ts.empty() || _ts.size() != _tipv.size())
+      run.fail("tracked", "not the history of this run (file damaged?)");
+    _E0 = tracked[0];
+    _emax = tracked[1];
+    _drift = tracked[2];
+    _imbalance = tracked[3];
+    _frames_written = static_cast<int>(tracked[4]);
+    _out["restarted_from_step"] = _solver->steps();
+    if (_cfg.output_dir.empty())
+      return;
+    const std::filesystem::path dir(_cfg.output_dir);
+    _writer = std::make_unique<XdmfWriter>(*_model, dir / "cantilever.xdmf", root.group("cantilever_xdmf"));
+    reopen_text(_csv, dir / "history.csv", run.read_int("csv_bytes"));
+  }
+
+  /// The checkpoint: the solver, the tip history, the output files' extent.
+  void save(const checkpoint::Group& root)
+  {
+    _solver->save(root.group("shell"));
+    const auto run = root.group("run");
+    run.write("t", _ts);
+    run.write("tip", _tipv);
+    run.write("tracked", std::vector<double>{_E0, _emax, _drift, _imbalance, double(_frames_written)});
+    if (_writer)
+      _writer->save(root.group("cantilever_xdmf"));
+    if (_csv.is_open())
+      run.write_int("csv_bytes", flushed_size(_csv, std::filesystem::path(_cfg.output_dir) / "history.csv"));
+  }
+
+  void print_header()
+  {
     if (!_cfg.quiet)
       std::cout << "dt = " << _dt << " s (critical " << _dt_crit << " s), " << _nsteps
                 << " steps to t = " << _t_end << " s, damping " << _damping << " 1/s\n"
@@ -336,16 +387,20 @@ private:
   {
     const std::int64_t nsteps = _nsteps;
     const std::int64_t every = std::max<std::int64_t>(1, nsteps / std::max(1, _cfg.frames));
-    const auto e0 = _solver->energy();
-    const double E0 = e0.kinetic + e0.strain;
     _ts.reserve(nsteps + 1);
     _tipv.reserve(nsteps + 1);
-    _ts.push_back(0.0);
-    _tipv.push_back(tip_value(_solver->u()));
-    _emax = E0;
-    write_energy(e0, true);
+    if (_ts.empty()) // a new run (a restarted one has its history)
+    {
+      const auto e0 = _solver->energy();
+      _E0 = e0.kinetic + e0.strain;
+      _ts.push_back(0.0);
+      _tipv.push_back(tip_value(_solver->u()));
+      _emax = _E0;
+      write_energy(e0, true);
+    }
+    const double E0 = _E0;
     const std::int64_t print_every = std::max<std::int64_t>(1, nsteps / 10);
-    for (std::int64_t s = 1; s <= nsteps; ++s)
+    for (std::int64_t s = _solver->steps() + 1; s <= nsteps; ++s)
     {
       _solver->step();
       _ts.push_back(_solver->time());
@@ -369,7 +424,10 @@ private:
           write_energy(e, s % print_every == 0 || s == nsteps);
         }
       }
-      check_stop(_solver->time());
+      if (_ckpt)
+        _ckpt->end_of_step(s, _solver->time(), [this](const checkpoint::Group& g) { save(g); });
+      else
+        check_stop(_solver->time());
     }
     if (_writer)
       _writer->close();
@@ -435,7 +493,8 @@ private:
   int _frames_written = 0;
   std::ofstream _csv;
   std::vector<double> _ts, _tipv;
-  double _drift = 0.0, _imbalance = 0.0, _emax = 0.0;
+  double _drift = 0.0, _imbalance = 0.0, _emax = 0.0, _E0 = 0.0;
+  std::unique_ptr<Checkpointer> _ckpt;
 };
 } // namespace
 

@@ -9,6 +9,8 @@
 #include "dembridge/shell/mesh.h"
 #include "dembridge/shell/model.h"
 
+#include "restart.h"
+
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -41,6 +43,8 @@ struct CantileverConfig
   std::string output_dir;              ///< "" = write nothing
   int frames = 50;                     ///< XDMF frames over the run
   bool quiet = false;                  ///< no progress lines
+  /// Checkpoints and restart (restart.h); null: neither.
+  const RestartOptions* restart = nullptr;
 };
 
 /// Runs the experiment; returns the summary (keys:

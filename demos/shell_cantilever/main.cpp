@@ -74,8 +74,12 @@ int main(int argc, char** argv)
   demo::add_integer(app, "--frames", c.frames, "XDMF frames over the run", Allowed::closed(1, 100000));
   demo::add_output_dir(app, "--output", c.output_dir, "output folder (XDMF, CSV); empty = none");
   demo::add_output_file(app, "--summary", summary, "write key results as JSON to this file");
+  demo::RestartOptions restart;
+  demo::add_restart_options(app, restart);
   if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
     return rc;
+  demo::record_setup(app, restart);
+  c.restart = &restart;
 
   return demo::run_guarded(argc, argv, [&]
   {
