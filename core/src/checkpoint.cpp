@@ -252,4 +252,27 @@ void File::commit()
   std::filesystem::rename(tmp, _file);
 }
 
+std::int64_t reopen_frames(const std::filesystem::path& h5, std::size_t frames)
+{
+  const std::string name = h5.string();
+  QuietHdf5 quiet;
+  hid_t id = std::filesystem::is_regular_file(h5) && H5Fis_hdf5(name.c_str()) > 0
+                 ? H5Fopen(name.c_str(), H5F_ACC_RDWR, H5P_DEFAULT)
+                 : -1;
+  if (id < 0)
+    throw std::runtime_error("cannot continue the output '" + name
+                             + "': missing or not HDF5 (restart into the output folder of the run "
+                               "that wrote the checkpoint)");
+  auto frame = [](std::size_t k) { return "/frame_" + std::to_string(k); };
+  if (frames > 0 && H5Lexists(id, frame(frames - 1).c_str(), H5P_DEFAULT) <= 0)
+  {
+    H5Fclose(id);
+    throw std::runtime_error("cannot continue the output '" + name + "': it holds fewer than the "
+                             + std::to_string(frames) + " frames the checkpoint recorded");
+  }
+  for (std::size_t k = frames; H5Lexists(id, frame(k).c_str(), H5P_DEFAULT) > 0; ++k)
+    H5Ldelete(id, frame(k).c_str(), H5P_DEFAULT);
+  return id;
+}
+
 } // namespace dembridge::checkpoint

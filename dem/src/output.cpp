@@ -53,6 +53,34 @@ ParticleWriter::ParticleWriter(const std::filesystem::path& file, const Links& l
   write_xdmf();
 }
 
+ParticleWriter::ParticleWriter(const std::filesystem::path& file, const Links& links,
+                               std::size_t particles, bool cracks, const checkpoint::Group& resume)
+    : _xdmf(file), _h5(file), _cracks(cracks), _n(particles)
+{
+  _h5.replace_extension(".h5");
+  resume.read("times", _times);
+  std::vector<std::int64_t> broken;
+  resume.read("broken_count", broken);
+  if (broken.size() != _times.size())
+    resume.fail("broken_count", "not one count per frame");
+  _broken_count.assign(broken.begin(), broken.end());
+  _file = checkpoint::reopen_frames(_h5, _times.size());
+  _initial_links.assign(particles, 0);
+  for (std::size_t k = 0; k < links.size(); ++k)
+  {
+    ++_initial_links[links.a[k]];
+    ++_initial_links[links.b[k]];
+  }
+  write_xdmf();
+}
+
+void ParticleWriter::save(const checkpoint::Group& g) const
+{
+  g.write("times", _times);
+  std::vector<std::int64_t> broken(_broken_count.begin(), _broken_count.end());
+  g.write("broken_count", broken);
+}
+
 ParticleWriter::~ParticleWriter() { close(); }
 
 void ParticleWriter::close()

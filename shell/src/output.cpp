@@ -96,6 +96,28 @@ XdmfWriter::XdmfWriter(const FEModel& model, const std::filesystem::path& file)
   I.write_xdmf();
 }
 
+XdmfWriter::XdmfWriter(const FEModel& model, const std::filesystem::path& file,
+                       const checkpoint::Group& resume)
+    : _impl(std::make_unique<Impl>())
+{
+  auto& I = *_impl;
+  I.xdmf = file;
+  I.h5 = file;
+  I.h5.replace_extension(".h5");
+  I.nodes = model.num_nodes();
+  I.cells = model.num_cells();
+  I.npc = model.nodes_per_cell();
+  I.bs = model.block_size();
+  I.cell = xdmf_cell(model.is_shell(), I.npc).first;
+  resume.read("times", I.times);
+  I.file = checkpoint::reopen_frames(I.h5, I.times.size());
+  I.write_xdmf();
+}
+
+void XdmfWriter::save(const checkpoint::Group& g) const { g.write("times", _impl->times); }
+
+std::size_t XdmfWriter::frames() const { return _impl->times.size(); }
+
 XdmfWriter::~XdmfWriter() { close(); }
 
 void XdmfWriter::close()

@@ -109,4 +109,11 @@ private:
   bool _writing;
 };
 
+/// Reopens the HDF5 file of a time series written as groups /frame_0,
+/// /frame_1, ... to continue it after its first `frames` frames, those a
+/// checkpoint recorded (frames written after the checkpoint are deleted).
+/// Returns the HDF5 file id (hid_t). @throws std::runtime_error naming the
+/// file if it is missing, not HDF5 or holds fewer frames.
+std::int64_t reopen_frames(const std::filesystem::path& h5, std::size_t frames);
+
 } // namespace dembridge::checkpoint

@@ -7,6 +7,7 @@
 /// so what was written stays readable if the run stops.
 
 #include "dembridge/dem/assembly.h"
+#include "dembridge/core/checkpoint.h"
 
 #include <filesystem>
 #include <memory>
@@ -23,6 +24,10 @@ public:
   /// the broken links as a second grid "cracks".
   ParticleWriter(const std::filesystem::path& file, const Links& links, std::size_t particles,
                  bool cracks = true);
+  /// Continues the series `file` from a checkpoint written by save(): its
+  /// frames up to the checkpoint are kept, later ones dropped.
+  ParticleWriter(const std::filesystem::path& file, const Links& links, std::size_t particles,
+                 bool cracks, const checkpoint::Group& resume);
   ~ParticleWriter();
   ParticleWriter(const ParticleWriter&) = delete;
   ParticleWriter& operator=(const ParticleWriter&) = delete;
@@ -31,6 +36,8 @@ public:
   void write(double t, const Particles& p, const Links& l);
   std::size_t frames() const { return _times.size(); }
   void close();
+  /// The frames written so far (times, crack counts), to a checkpoint.
+  void save(const checkpoint::Group& g) const;
 
 private:
   void write_xdmf() const;

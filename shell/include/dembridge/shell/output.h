@@ -8,6 +8,8 @@
 /// all in 64-bit floats, so one can colour by one field and warp by another.
 /// The file is flushed and the XDMF rewritten at every frame.
 
+#include "dembridge/core/checkpoint.h"
+
 #include <filesystem>
 #include <memory>
 #include <span>
@@ -21,11 +23,17 @@ class XdmfWriter
 public:
   /// Opens `file` (.xdmf; the .h5 beside it) for writing and writes the mesh.
   XdmfWriter(const FEModel& model, const std::filesystem::path& file);
+  /// Continues the series `file` from a checkpoint written by save(): its
+  /// frames up to the checkpoint are kept, later ones dropped.
+  XdmfWriter(const FEModel& model, const std::filesystem::path& file, const checkpoint::Group& resume);
   ~XdmfWriter();
   /// Appends the fields at time t from the dof arrays u, v (num_dofs).
   void write(double t, std::span<const double> u, std::span<const double> v);
   /// Flushes and closes (also done by the destructor).
   void close();
+  /// The frames written so far (their times), to a checkpoint.
+  void save(const checkpoint::Group& g) const;
+  std::size_t frames() const;
 
 private:
   struct Impl;
