@@ -28,7 +28,7 @@ import time
 import h5py
 import numpy as np
 
-SKIP = {"wall_s", "restarted_from_step"}
+SKIP = {"wall_s", "restarted_from_step", "step_time_s", "de_step_split_s"}
 
 
 def run(cmd):

@@ -183,7 +183,12 @@ public:
     build_solvers();
     apply_conditions();
     set_up_probes();
-    open_output();
+    if (_c.restart)
+      _ckpt = std::make_unique<Checkpointer>(*_c.restart, _c.output);
+    if (_ckpt && _ckpt->restarting())
+      resume();
+    else
+      open_output();
     march();
     return summary();
   }
@@ -424,7 +429,65 @@ private:
     _csv << "t_s,probe_0_75_m,probe_0_4351_m,end_m\n";
   }
 
+  /// Continues from the checkpoint: the end released if it was, the
+  /// solvers' state, the probe histories, the output files up to the
+  /// checkpoint.
+  void resume()
+  {
+    const auto file = _ckpt->open_restart();
+    const auto root = file.root();
+    const auto run = root.group("run");
+    const bool released = run.read_int("released") != 0;
+    if (_dynamic && released)
+      release(); // the conditions as they were at the checkpoint
+    _released = released;
+    if (_coupled)
+      _coupled->load(root.group("coupled"));
+    else if (_fe_alone)
+      _fe_alone->load(root.group("shell"));
+    else
+      _de_alone->load(root.group("dem"));
+    run.read("t_after", _t_after);
+    _after.assign(_probes.size(), {});
+    for (std::size_t k = 0; k < _probes.size(); ++k)
+      run.read("after_" + std::to_string(k), _after[k]);
+    _restarted_from = steps_done();
+    if (_c.output.empty())
+      return;
+    const std::filesystem::path dir(_c.output);
+    if (_use_fe)
+      _shell_out = std::make_unique<shell::XdmfWriter>(*_fe, dir / "shell.xdmf", root.group("shell_xdmf"));
+    if (_use_de)
+      _part_out = std::make_unique<dem::ParticleWriter>(dir / "particles.xdmf", _links, _p.size(), false,
+                                                        root.group("particles_xdmf"));
+    reopen_text(_csv, dir / "history.csv", run.read_int("csv_bytes"));
+  }
+
+  /// The checkpoint: the solvers, the release, the probe histories, the
+  /// output files' extent.
+  void save(const checkpoint::Group& root)
+  {
+    if (_coupled)
+      _coupled->save(root.group("coupled"));
+    else if (_fe_alone)
+      _fe_alone->save(root.group("shell"));
+    else
+      _de_alone->save(root.group("dem"));
+    const auto run = root.group("run");
+    run.write_int("released", _released ? 1 : 0);
+    run.write("t_after", _t_after);
+    for (std::size_t k = 0; k < _after.size(); ++k)
+      run.write("after_" + std::to_string(k), _after[k]);
+    if (_shell_out)
+      _shell_out->save(root.group("shell_xdmf"));
+    if (_part_out)
+      _part_out->save(root.group("particles_xdmf"));
+    if (_csv.is_open())
+      run.write_int("csv_bytes", flushed_size(_csv, std::filesystem::path(_c.output) / "history.csv"));
+  }
+
   // ---- run ------------------------------------------------------------------
+  std::int64_t steps_done() const { return _fes ? _fes->steps() : _des->steps(); }
   double probe_value(std::size_t k) const
   {
     return _probe_ids[k].empty() ? _cols->at(_fes->u(), _probes[k].x)
@@ -460,11 +523,14 @@ private:
                   "(beam theory: first frequency %.5g Hz)\n",
                   _c.model.c_str(), _c.load.c_str(), _c.regime.c_str(), _p.size(), _use_fe ? _fe->num_nodes() : 0,
                   _dt, static_cast<long long>(nsteps), _end_time, _f1);
-    _after.assign(_probes.size(), {});
-    _released = !_dynamic;
     const std::int64_t every = std::max<std::int64_t>(1, nsteps / _c.frames);
-    write_frame(0.0);
-    for (std::int64_t k = 1; k <= nsteps; ++k)
+    if (_restarted_from < 0) // a new run (a restarted one has its history)
+    {
+      _after.assign(_probes.size(), {});
+      _released = !_dynamic;
+      write_frame(0.0);
+    }
+    for (std::int64_t k = steps_done() + 1; k <= nsteps; ++k)
     {
       if (_coupled)
         _coupled->step(k % every == 0 || k == nsteps); // observed where frames are written
@@ -494,7 +560,10 @@ private:
         std::printf("  t %.4e s  step %lld/%lld  probe 0.75: %.4e m  probe %.4g: %.4e m  end %.4e m  (%.1f s)\n", t,
                     static_cast<long long>(k), static_cast<long long>(nsteps), v0, _probes[1].x, v1,
                     end_value(), _clock.seconds());
-      check_stop(t);
+      if (_ckpt)
+        _ckpt->end_of_step(k, t, [this](const checkpoint::Group& g) { save(g); });
+      else
+        check_stop(t);
     }
   }
 
@@ -541,6 +610,8 @@ private:
     else
       measure_statics(out);
     timings(out);
+    if (_restarted_from >= 0)
+      out["restarted_from_step"] = _restarted_from;
     out["wall_s"] = _clock.seconds();
     return out;
   }
@@ -670,6 +741,8 @@ private:
   double _step_clock = 0.0;
   std::vector<double> _t_after;
   std::vector<std::vector<double>> _after;
+  std::unique_ptr<Checkpointer> _ckpt;
+  std::int64_t _restarted_from = -1; // the step a restarted run continued from
 };
 } // namespace
 

@@ -20,6 +20,8 @@
 /// The bar is linear elastic (the paper validates the coupling in
 /// elasticity): the DE links' strengths are raised out of reach.
 
+#include "restart.h"
+
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -56,6 +58,8 @@ struct BarConfig
   int frames = 20;                ///< output frames
   std::string output;             ///< folder for history.csv, shape.csv, XDMF; empty = none
   bool quiet = false;             ///< no progress lines
+  /// Checkpoints and restart of a single case (restart.h); null: neither.
+  const RestartOptions* restart = nullptr;
 };
 
 /// Checks the options that need no run (names, sizes, positions).

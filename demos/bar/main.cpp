@@ -63,9 +63,20 @@ int main(int argc, char** argv)
   demo::add_program(app, "--python", python, "Python with matplotlib for the --compare plots");
   demo::add_output_dir(app, "--output", c.output, "output folder (history.csv, shape.csv, shell.xdmf, particles.xdmf); empty = none");
   demo::add_output_file(app, "--summary", summary, "write key results as JSON to this file");
+  demo::RestartOptions restart;
+  demo::add_restart_options(app, restart);
   if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
     return rc;
   c.skin_compensation = skin == "true";
+  if (compare && (!restart.restart.empty() || restart.every > 0 || !restart.file.empty()))
+  {
+    std::cerr << "error: --restart, --checkpoint and --checkpoint-every apply to a single case, not to --compare"
+              << std::endl;
+    return 2;
+  }
+  demo::record_setup(app, restart);
+  if (!compare)
+    c.restart = &restart;
 
   return demo::run_guarded(argc, argv, [&]
   {
