@@ -9,3 +9,6 @@ cmake --build build -j"$(nproc)"
 cd build
 # one OpenMP thread per test: CTest already runs one test per core
 OMP_NUM_THREADS=1 ctest --output-on-failure -j"$(nproc)"
+cd ..
+# the unit tests again under AddressSanitizer and UndefinedBehaviorSanitizer
+sh scripts/sanitize.sh

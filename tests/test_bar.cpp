@@ -24,7 +24,9 @@ demo::BarConfig reduced(const std::string& model, const std::string& load, const
 }
 } // namespace
 
-TEST_CASE("bar, reduced: static shapes against beam theory, dynamic frequencies agree", "[bar]")
+// [long]: over 3 minutes under the sanitizers (scripts/sanitize.sh leaves it
+// out; the code it runs is the bar demo's, which the other [bar] tests run too)
+TEST_CASE("bar, reduced: static shapes against beam theory, dynamic frequencies agree", "[bar][long]")
 {
   // the E the identified parameters give on this packing: DE static tension
   const double E = demo::bar_modulus(reduced("de", "tension", "static"));

@@ -97,8 +97,10 @@ TEST_CASE("compression sample breaks mostly in shear and is stronger than in ten
   CHECK(c["links_broken_shear"].get<std::size_t>() > c["links_broken_tension"].get<std::size_t>());
 }
 
+// [long]: over 5 minutes under the sanitizers (scripts/sanitize.sh leaves it
+// out; it runs the sample test, which the other [sample] tests run too)
 TEST_CASE("cohesion demand: with C0 above it a test is the same bit for bit, below it not",
-          "[dem][sample]")
+          "[dem][sample][long]")
 {
   // ForceCounters::cohesion_demand is the smallest C0 at which no link's
   // shear reached the Mohr-Coulomb cap; C0 enters nothing else, so a run with

@@ -74,7 +74,8 @@ int main(int argc, char** argv)
               << std::endl;
     return 2;
   }
-  demo::record_setup(app, restart);
+  if (const int rc = demo::record_setup(app, restart); rc >= 0)
+    return rc;
   if (!compare)
     c.restart = &restart;
 

@@ -34,7 +34,7 @@ void add_restart_options(CLI::App& app, RestartOptions& o)
              });
 }
 
-void record_setup(CLI::App& app, RestartOptions& o, const std::vector<std::string>& ignore)
+int record_setup(CLI::App& app, RestartOptions& o, const std::vector<std::string>& ignore)
 {
   static const std::vector<std::string> where{"--help", "--output", "--summary", "--checkpoint",
                                               "--checkpoint-every", "--restart"};
@@ -52,6 +52,15 @@ void record_setup(CLI::App& app, RestartOptions& o, const std::vector<std::strin
     o.setup[name] = val;
   }
   o.program = app.get_name();
+  const CLI::Option* out = app.get_option_no_throw("--output");
+  if (o.every > 0 && o.file.empty() && (!out || out->results().empty() || out->results()[0].empty()))
+  {
+    std::cerr << "error: --checkpoint-every: " << o.every
+              << " steps, but nowhere to write the checkpoints: give --output DIR (they go to "
+                 "DIR/checkpoint.h5) or --checkpoint FILE" << std::endl;
+    return 2;
+  }
+  return -1;
 }
 
 Checkpointer::Checkpointer(const RestartOptions& o, const std::string& output_dir) : _o(o)

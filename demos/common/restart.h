@@ -41,7 +41,10 @@ void add_restart_options(CLI::App& app, RestartOptions& o);
 /// After parsing: records in o.setup every option of `app` with its value,
 /// except those that say where or how often to write (--output, --summary,
 /// --checkpoint, --checkpoint-every, --restart, --help) and `ignore`.
-void record_setup(CLI::App& app, RestartOptions& o, const std::vector<std::string>& ignore = {});
+/// Returns -1 to go on, or 2 after printing an error: checkpoints asked for
+/// (--checkpoint-every) with nowhere to write them (no --output, no
+/// --checkpoint).
+int record_setup(CLI::App& app, RestartOptions& o, const std::vector<std::string>& ignore = {});
 
 class Checkpointer
 {

@@ -421,7 +421,8 @@ int main(int argc, char** argv)
   demo::add_restart_options(app, c.restart);
   if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
     return rc;
-  demo::record_setup(app, c.restart);
+  if (const int rc = demo::record_setup(app, c.restart); rc >= 0)
+    return rc;
 
   return demo::run_guarded(argc, argv, [&]
   {

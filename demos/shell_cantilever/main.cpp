@@ -78,7 +78,8 @@ int main(int argc, char** argv)
   demo::add_restart_options(app, restart);
   if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
     return rc;
-  demo::record_setup(app, restart);
+  if (const int rc = demo::record_setup(app, restart); rc >= 0)
+    return rc;
   c.restart = &restart;
 
   return demo::run_guarded(argc, argv, [&]
