@@ -14,7 +14,11 @@ and exits 130), and restarts it with --restart B/checkpoint.h5. Checks:
 - a restart with another value of a set-up option (--bad OPTION VALUE) is
   refused with exit code 1 and a message naming the option.
 
-Usage: restart.py --every N [--bad OPTION VALUE] EXE ARGS...
+With --kill, the run is killed (SIGKILL, no checkpoint of its own) a moment
+after its first periodic checkpoint instead: the restart then continues from
+that older checkpoint, dropping the frames and CSV rows written after it.
+
+Usage: restart.py --every N [--kill] [--bad OPTION VALUE] EXE ARGS...
 """
 import glob
 import json
@@ -72,9 +76,11 @@ def compare_h5(fa, fb, problems):
 
 
 def main(argv):
-    every, bad = None, None
+    every, bad, kill = None, None, False
     while argv and argv[0].startswith("--"):
-        if argv[0] == "--every":
+        if argv[0] == "--kill":
+            kill, argv = True, argv[1:]
+        elif argv[0] == "--every":
             every, argv = argv[1], argv[2:]
         elif argv[0] == "--bad":
             bad, argv = argv[1:3], argv[3:]
@@ -95,13 +101,15 @@ def main(argv):
         start = time.time()
         while not os.path.exists(ckpt) and p.poll() is None and time.time() - start < 300:
             time.sleep(0.02)
-        p.send_signal(signal.SIGINT)
+        if kill:
+            time.sleep(0.3)  # outputs written after the checkpoint, to be dropped
+        p.send_signal(signal.SIGKILL if kill else signal.SIGINT)
         _, err = p.communicate(timeout=120)
-        if p.returncode != 130:
+        if p.returncode != (-9 if kill else 130):
             print(f"the run was not interrupted (exit {p.returncode}; make it longer or --every smaller): {err[-300:]}")
             return 1
-        s = json.load(open(B + ".json"))
-        if s.get("completed") is not False or s.get("checkpoint") != ckpt:
+        s = {} if kill else json.load(open(B + ".json"))
+        if not kill and (s.get("completed") is not False or s.get("checkpoint") != ckpt):
             problems.append(f"interrupted summary: {s}")
         if bad:
             r = run(argv + [bad[0], bad[1], "--output", B, "--restart", ckpt])
@@ -130,7 +138,7 @@ def main(argv):
                 compare_h5(fa, fb, problems)
             elif open(fa, "rb").read() != open(fb, "rb").read():
                 problems.append(f"{rel}: differs")
-        print(f"{os.path.basename(argv[0])}: interrupted after {s.get('time_reached_s')} s of simulated time, "
+        print(f"{os.path.basename(argv[0])}: {'killed' if kill else 'interrupted'} after {s.get('time_reached_s', '?')} s of simulated time, "
               f"restarted from step {b.get('restarted_from_step')}; {files} output files and the summary compared")
     for pr in problems:
         print(pr)

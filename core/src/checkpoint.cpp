@@ -203,10 +203,12 @@ File File::create(const std::filesystem::path& file, const std::string& program)
   if (id < 0)
     throw std::runtime_error("checkpoint " + file.string() + ": cannot create '" + tmp + "'");
   File f(id, file, true);
-  const Group r = f.root();
-  r.write("format", std::string(format_name));
-  r.write_int("version", format_version);
-  r.write("program", program);
+  {
+    const Group r = f.root();
+    r.write("format", std::string(format_name));
+    r.write_int("version", format_version);
+    r.write("program", program);
+  }
   return f;
 }
 

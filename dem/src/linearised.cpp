@@ -2,6 +2,8 @@
 // critical time step bounded from it.
 #include "force_loop.h"
 
+#include "dembridge/dem/body.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -56,13 +58,17 @@ void stiffness_action(const Particles& p, const Links& l, std::span<const double
   }
 }
 
-double critical_time_step(const Particles& p, const Links& l)
+namespace
 {
-  // Rows of M^-1/2 K M^-1/2 in 3 x 3 blocks: per link, translation blocks of
-  // norm <= max(kn, ks), translation-rotation blocks <= ks l, rotation blocks
-  // <= ks l_a l_b (and ks l_a^2 on the diagonal).
+/// Rows of M^-1/2 K M^-1/2 in 3 x 3 blocks, summed per sphere: translation
+/// rt and rotation rr. Per link, translation blocks of norm <= max(kn, ks),
+/// translation-rotation blocks <= ks l, rotation blocks <= ks l_a l_b (and
+/// ks l_a^2 on the diagonal).
+void link_rows(const Particles& p, const Links& l, std::vector<double>& rt, std::vector<double>& rr)
+{
   const std::size_t n = p.size();
-  std::vector<double> rt(n, 0.0), rr(n, 0.0);
+  rt.assign(n, 0.0);
+  rr.assign(n, 0.0);
   for (std::size_t k = 0; k < l.size(); ++k)
   {
     if (l.state[k] != LinkState::intact)
@@ -77,12 +83,42 @@ double critical_time_step(const Particles& p, const Links& l)
     rr[i] += ks * la * la / Ii + ks * la * lb / std::sqrt(Ii * Ij) + ks * la / std::sqrt(Ii * mi) + ks * la / std::sqrt(Ii * mj);
     rr[j] += ks * lb * lb / Ij + ks * la * lb / std::sqrt(Ii * Ij) + ks * lb / std::sqrt(Ij * mj) + ks * lb / std::sqrt(Ij * mi);
   }
+}
+
+double step_from_rows(const std::vector<double>& rt, const std::vector<double>& rr)
+{
   double lmax = 0.0;
-  for (std::size_t i = 0; i < n; ++i)
+  for (std::size_t i = 0; i < rt.size(); ++i)
     lmax = std::max({lmax, rt[i], rr[i]});
   if (!(lmax > 0.0))
     throw std::runtime_error("critical time step: the assembly has no intact link");
   return 2.0 / std::sqrt(lmax);
+}
+} // namespace
+
+double critical_time_step(const Particles& p, const Links& l)
+{
+  std::vector<double> rt, rr;
+  link_rows(p, l, rt, rr);
+  return step_from_rows(rt, rr);
+}
+
+double critical_time_step(const Particles& p, const Links& l, const Material& m)
+{
+  // and one contact with a rigid body per sphere (of infinite mass: the
+  // body's rows are left out), K_n = body_contact_stiffness, K_s = cs K_n,
+  // its shear acting at the arm r from the centre
+  std::vector<double> rt, rr;
+  link_rows(p, l, rt, rr);
+  const double cs = impl::contact_factors(m).cs;
+  for (std::size_t i = 0; i < p.size(); ++i)
+  {
+    const double kn = body_contact_stiffness(m, p.r[i]), ks = cs * kn, r = p.r[i];
+    const double mi = p.m[i], Ii = p.inertia[i];
+    rt[i] += std::max(kn, ks) / mi + ks * r / std::sqrt(mi * Ii);
+    rr[i] += ks * r * r / Ii + ks * r / std::sqrt(Ii * mi);
+  }
+  return step_from_rows(rt, rr);
 }
 
 } // namespace dembridge::dem

@@ -65,8 +65,10 @@ CellGrid::CellGrid(std::span<const double> x, double cell)
 
 int CellGrid::cell_of(double v, int k) const
 {
-  const int c = static_cast<int>((v - _lo[k]) / _h);
-  return std::clamp(c, 0, _n[k] - 1);
+  // clamped before the conversion: a far (or infinite) coordinate lies in
+  // an edge cell
+  const double c = (v - _lo[k]) / _h;
+  return c <= 0.0 ? 0 : c >= _n[k] - 1 ? _n[k] - 1 : static_cast<int>(c);
 }
 
 NeighbourList::NeighbourList(double skin) : _skin(skin)
@@ -93,7 +95,9 @@ bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
       return false;
   }
   const double rmax = np ? *std::max_element(r.begin(), r.end()) : 0.0;
-  CellGrid grid(x, 2.0 * rmax + _skin);
+  _cell = 2.0 * rmax + _skin;
+  _grid.emplace(x, _cell);
+  const CellGrid& grid = *_grid;
   // links sorted by (a, b): those of sphere i as a are a contiguous range
   const std::vector<std::int32_t> first = impl::first_by_a(np, links.a, links.b, "neighbour list: links");
   // each thread searches a contiguous block of spheres (static schedule), so
@@ -234,7 +238,7 @@ std::size_t NeighbourList::bytes() const
 {
   return (a.capacity() + b.capacity() + link.capacity()) * sizeof(std::int32_t)
          + (fs.capacity() + n.capacity() + _x_build.capacity()) * sizeof(double)
-         + touching.capacity();
+         + touching.capacity() + (_grid ? _grid->bytes() : 0);
 }
 
 } // namespace dembridge::dem

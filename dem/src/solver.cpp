@@ -66,11 +66,86 @@ void DemSolver::start()
 {
   _nl.update(_p.x, _p.r, _l);
   compute_forces(_p, _l, _nl, _mat, 0.0, _counters, *_scratch);
+  contact_bodies(0.0);
   if (!_forces.empty())
     external(_forces, _t, _fext);
   _e = DemEnergy{};
+  for (auto& c : _contacts)
+    c.friction_work = 0.0;
   const DemEnergy e = energy();
-  _e.initial = e.kinetic + e.elastic;
+  _e.initial = e.kinetic + e.elastic + e.body_kinetic + e.body_contact;
+  _started = true;
+}
+
+std::size_t DemSolver::add_body(RigidBody b)
+{
+  if (_started)
+    throw std::runtime_error("rigid body '" + b.name + "': bodies are added before start()");
+  if (b.name.empty() || b.name[0] == '.' || b.name.find('/') != std::string::npos)
+    throw std::runtime_error("rigid body '" + b.name + "': a name must be non-empty, without '/', not starting with '.'");
+  b.shape.validate();
+  for (const auto& o : _bodies)
+    if (o.name == b.name)
+      throw std::runtime_error("rigid body '" + b.name + "': the name is in use");
+  if (!b.fixed && (!(b.mass > 0.0) || !(b.inertia[0] > 0.0 && b.inertia[1] > 0.0 && b.inertia[2] > 0.0)))
+    throw std::runtime_error("rigid body '" + b.name + "': a moving body needs a mass and inertias > 0");
+  if (!(b.friction >= 0.0) || !std::isfinite(b.friction))
+    throw std::runtime_error("rigid body '" + b.name + "': friction " + std::to_string(b.friction) + " must be >= 0");
+  if (b.shape.kind != Shape::Kind::projectile)
+    b.fixed = true; // planes and boxes are walls
+  _bodies.push_back(std::move(b));
+  _contacts.emplace_back();
+  return _bodies.size() - 1;
+}
+
+void DemSolver::contact_bodies(double dt)
+{
+  for (std::size_t k = 0; k < _bodies.size(); ++k)
+    body_forces(_p, _bodies[k], _contacts[k], _nl, _mat, dt);
+}
+
+void DemSolver::kick_bodies(double h)
+{
+  for (auto& b : _bodies)
+    if (!b.fixed)
+      for (int k = 0; k < 3; ++k)
+      {
+        b.v[k] += h * b.f[k] / b.mass;
+        b.L[k] += h * b.t[k];
+      }
+}
+
+void DemSolver::drift_bodies()
+{
+  // x += dt v; R <- exp(dt [omega]) R (Rodrigues), omega from L(n+1/2)
+  for (auto& b : _bodies)
+  {
+    if (b.fixed)
+      continue;
+    const auto w = b.omega();
+    for (int k = 0; k < 3; ++k)
+      b.x[k] += _dt * b.v[k];
+    const double wn = std::sqrt(dot3(w.data(), w.data())), th = wn * _dt;
+    if (!(th > 0.0))
+      continue;
+    const double u[3] = {w[0] / wn, w[1] / wn, w[2] / wn}, s = std::sin(th), c = 1.0 - std::cos(th);
+    const double K[9] = {0, -u[2], u[1], u[2], 0, -u[0], -u[1], u[0], 0};
+    double Q[9];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+      {
+        double kk = 0.0;
+        for (int q = 0; q < 3; ++q)
+          kk += K[3 * i + q] * K[3 * q + j];
+        Q[3 * i + j] = (i == j ? 1.0 : 0.0) + s * K[3 * i + j] + c * kk;
+      }
+    std::array<double, 9> R{};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        for (int q = 0; q < 3; ++q)
+          R[3 * i + j] += Q[3 * i + q] * b.R[3 * q + j];
+    b.R = R;
+  }
 }
 
 void DemSolver::kick(double h)
@@ -110,6 +185,7 @@ void DemSolver::begin_step()
     _vold[q] = _p.v[d];
   }
   kick(0.5 * dt);
+  kick_bodies(0.5 * dt);
   tie_plates();
   for (const auto& m : _motions)
   {
@@ -214,6 +290,15 @@ void DemSolver::check_finite() const
 #pragma omp parallel for schedule(static) reduction(+ : check) num_threads(impl::threads_for(n))
   for (std::size_t i = 0; i < 3 * n; ++i)
     check += _p.x[i] + _p.v[i] + _p.w[i];
+  for (const auto& b : _bodies)
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(b.x[k]) || !std::isfinite(b.v[k]) || !std::isfinite(b.L[k]))
+      {
+        std::ostringstream s;
+        s << "non-finite position or velocity of the rigid body '" << b.name << "' at t = " << _t << " s (step "
+          << _steps << "): the run is unstable; reduce the time step";
+        throw std::runtime_error(s.str());
+      }
   if (std::isfinite(check))
     return;
   std::size_t bad = 0;
@@ -236,16 +321,19 @@ void DemSolver::end_step()
   if (!_forces.empty())
     external(_forces, t_new, _fext);
   const Drift moved = drift();
+  drift_bodies();
   const double w_ext = moved.external_work, w_damp = moved.damping;
   const double t1 = omp_get_wtime();
   _nl.update(_p.x, _p.r, _l);
   const double t2 = omp_get_wtime();
   compute_forces(_p, _l, _nl, _mat, dt, _counters, *_scratch);
+  contact_bodies(dt);
   const double t3 = omp_get_wtime();
   _time.neighbours += t2 - t1;
   _time.forces += t3 - t2;
   const double w_presc = held_reactions();
   kick(0.5 * dt);
+  kick_bodies(0.5 * dt);
   tie_plates();
   for (const auto& m : _motions)
     if (m.kind == MotionKind::velocity && !m.hinged())
@@ -283,7 +371,8 @@ void DemSolver::check_energy() const
 {
   const DemEnergy e = energy();
   const double work = e.external_work + e.prescribed_work;
-  const double scale = e.initial + std::abs(e.external_work) + std::abs(e.prescribed_work) + e.kinetic + e.elastic;
+  const double scale = e.initial + std::abs(e.external_work) + std::abs(e.prescribed_work) + e.kinetic + e.elastic
+                       + e.body_kinetic + e.body_contact;
   if (!(scale > 0.0) || e.imbalance() <= _guard_margin * scale)
     return;
   std::ostringstream s;
@@ -323,6 +412,13 @@ DemEnergy DemSolver::energy() const
   e.softening = softening_energy(_p, _l, _mat);
   e.breakage = _counters.breakage;
   e.friction = _counters.friction;
+  e.body_kinetic = e.body_contact = e.body_friction = 0.0;
+  for (std::size_t k = 0; k < _bodies.size(); ++k)
+  {
+    e.body_kinetic += _bodies[k].kinetic_energy();
+    e.body_contact += body_contact_energy(_p, _bodies[k], _contacts[k], _mat);
+    e.body_friction += _contacts[k].friction_work;
+  }
   return e;
 }
 

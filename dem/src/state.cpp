@@ -112,6 +112,7 @@ void NeighbourList::save(const Group& g) const
   g.write_int("builds", static_cast<std::int64_t>(_builds));
   g.write_int("version", static_cast<std::int64_t>(_version));
   g.write("skin", _skin);
+  g.write("cell", _cell);
 }
 
 void NeighbourList::load(const Group& g)
@@ -130,9 +131,71 @@ void NeighbourList::load(const Group& g)
     g.fail("a", "the pair arrays have inconsistent lengths (file damaged?)");
   _builds = static_cast<std::size_t>(g.read_int("builds"));
   _version = static_cast<std::size_t>(g.read_int("version"));
+  _cell = g.read_double("cell");
+  // the grid of the last build, from its positions (the constructor is deterministic)
+  if (_builds > 0)
+    _grid.emplace(_x_build, _cell);
+  else
+    _grid.reset();
 }
 
 // ---- DemSolver ------------------------------------------------------------------
+
+void DemSolver::save_bodies(const Group& g) const
+{
+  std::string names;
+  for (const auto& b : _bodies)
+    names += b.name + '\n';
+  g.write("names", names);
+  for (std::size_t k = 0; k < _bodies.size(); ++k)
+  {
+    const RigidBody& b = _bodies[k];
+    const BodyContacts& c = _contacts[k];
+    const Group h = g.group(b.name);
+    h.write("mass", b.mass);
+    for (auto [name, v] : {std::pair{"x", &b.x}, {"v", &b.v}, {"L", &b.L}, {"f", &b.f}, {"t", &b.t},
+                           {"x_refresh", &c.x_refresh}})
+      h.write(name, std::span<const double>(v->data(), 3));
+    h.write("R", std::span<const double>(b.R.data(), 9));
+    h.write("R_refresh", std::span<const double>(c.R_refresh.data(), 9));
+    h.write("contacts", c.ids);
+    h.write("shear", c.fs);
+    h.write("near", c.near);
+    h.write_int("version", static_cast<std::int64_t>(c.version));
+    h.write_int("refreshed", c.refreshed ? 1 : 0);
+    h.write("friction_work", c.friction_work);
+  }
+}
+
+void DemSolver::load_bodies(const Group& g)
+{
+  std::string names;
+  for (const auto& b : _bodies)
+    names += b.name + '\n';
+  if (g.read_string("names") != names)
+    g.fail("names", "the rigid bodies differ from this run's (another set-up)");
+  for (std::size_t k = 0; k < _bodies.size(); ++k)
+  {
+    RigidBody& b = _bodies[k];
+    BodyContacts& c = _contacts[k];
+    const Group h = g.group(b.name);
+    if (h.read_double("mass") != b.mass)
+      h.fail("mass", "differs from this run's body '" + b.name + "'");
+    for (auto [name, v] : {std::pair{"x", &b.x}, {"v", &b.v}, {"L", &b.L}, {"f", &b.f}, {"t", &b.t},
+                           {"x_refresh", &c.x_refresh}})
+      h.read_exact(name, std::span<double>(v->data(), 3));
+    h.read_exact("R", std::span<double>(b.R.data(), 9));
+    h.read_exact("R_refresh", std::span<double>(c.R_refresh.data(), 9));
+    h.read("contacts", c.ids);
+    h.read("shear", c.fs);
+    h.read("near", c.near);
+    if (c.fs.size() != 3 * c.ids.size())
+      h.fail("shear", "not 3 values per contact (file damaged?)");
+    c.version = static_cast<std::size_t>(h.read_int("version"));
+    c.refreshed = h.read_int("refreshed") != 0;
+    c.friction_work = h.read_double("friction_work");
+  }
+}
 
 void DemSolver::save(const Group& g) const
 {
@@ -146,7 +209,8 @@ void DemSolver::save(const Group& g) const
   g.write("dt", _dt);
   g.write("damping", _c);
   const std::vector<double> e{_e.initial,  _e.kinetic, _e.elastic, _e.softening, _e.breakage,
-                              _e.friction, _e.damping, _e.external_work, _e.prescribed_work};
+                              _e.friction, _e.damping, _e.external_work, _e.prescribed_work,
+                              _e.body_kinetic, _e.body_contact, _e.body_friction};
   g.write("energy", e);
   const std::vector<double> c{_counters.friction, _counters.breakage, _counters.cohesion_demand,
                               _counters.track_cohesion ? 1.0 : 0.0};
@@ -166,6 +230,7 @@ void DemSolver::save(const Group& g) const
       hinged.push_back(_motion_vprev[q][k]);
     }
   g.write("hinged", hinged);
+  save_bodies(g.group("bodies"));
 }
 
 void DemSolver::load(const Group& g)
@@ -190,9 +255,9 @@ void DemSolver::load(const Group& g)
   std::vector<double> e, c;
   g.read("energy", e);
   g.read("counters", c);
-  if (e.size() != 9 || c.size() != 4)
+  if (e.size() != 12 || c.size() != 4)
     g.fail("energy", "unexpected length (file damaged?)");
-  _e = {e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8]};
+  _e = {e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8], e[9], e[10], e[11]};
   _counters.friction = c[0];
   _counters.breakage = c[1];
   _counters.cohesion_demand = c[2];
@@ -210,6 +275,7 @@ void DemSolver::load(const Group& g)
       _motion_reac[q][k] = hinged[6 * q + 2 * k];
       _motion_vprev[q][k] = hinged[6 * q + 2 * k + 1];
     }
+  load_bodies(g.group("bodies"));
   // the force loop's index structures are rebuilt for the loaded pairs
   _scratch = std::make_unique<ForceScratch>();
 }

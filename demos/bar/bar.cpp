@@ -150,6 +150,7 @@ double bar_modulus(BarConfig c)
   c.regime = "static";
   c.output.clear();
   c.quiet = true;
+  c.restart = nullptr; // a pre-run: the checkpoints are the case's
   return measured_modulus(run_bar(c));
 }
 

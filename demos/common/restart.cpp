@@ -94,9 +94,11 @@ void Checkpointer::write(const std::function<void(const checkpoint::Group&)>& sa
   if (!enabled())
     return;
   auto f = checkpoint::File::create(_file, _o.program);
-  const auto root = f.root();
-  root.write("setup", _o.setup.dump());
-  save(root);
+  {
+    const auto root = f.root(); // closed before the file is
+    root.write("setup", _o.setup.dump());
+    save(root);
+  }
   f.commit();
   ++_written;
   note_checkpoint(_file);

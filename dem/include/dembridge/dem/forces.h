@@ -68,5 +68,9 @@ void stiffness_action(const Particles& p, const Links& l, std::span<const double
 /// 2/sqrt(bound). Contacts are left out: their stiffness is that of a link of
 /// the same pair.
 double critical_time_step(const Particles& p, const Links& l);
+/// The same bound with one rigid-body contact per sphere on top of its
+/// links (body.h: body_contact_stiffness): the step for a run with bodies.
+/// A sphere with no intact link but the body contact still counts.
+double critical_time_step(const Particles& p, const Links& l, const Material& m);
 
 } // namespace dembridge::dem

@@ -8,7 +8,9 @@
 #include "dembridge/dem/assembly.h"
 #include "dembridge/core/checkpoint.h"
 
+#include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -52,6 +54,28 @@ public:
   }
   /// The particles in cell order.
   const std::vector<std::int32_t>& items() const { return _items; }
+  /// Calls fn(j) for every particle j in the cells that overlap the box
+  /// [lo, hi] (clamped to the grid: points outside it lie in its edge cells).
+  template <typename Fn>
+  void for_each_in_box(const double* lo, const double* hi, Fn&& fn) const
+  {
+    int c0[3], c1[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      if (hi[k] < _lo[k] - _h || lo[k] > _lo[k] + (_n[k] + 1) * _h)
+        return; // the box misses the grid
+      c0[k] = cell_of(lo[k], k);
+      c1[k] = cell_of(hi[k], k);
+    }
+    for (int i = c0[0]; i <= c1[0]; ++i)
+      for (int j = c0[1]; j <= c1[1]; ++j)
+      {
+        const std::size_t row = (std::size_t(i) * _n[1] + j) * _n[2];
+        for (std::int32_t q = _start[row + c0[2]]; q < _start[row + c1[2] + 1]; ++q)
+          fn(_items[q]);
+      }
+  }
+  std::size_t bytes() const { return (_start.capacity() + _items.capacity()) * sizeof(std::int32_t); }
 
   /// Calls fn(j, d2) for every particle j > i near particle i (same 27
   /// cells), with d2 the squared centre distance; x is the array the grid
@@ -99,6 +123,9 @@ public:
   /// Changes whenever the list of pairs changes (rebuild or added pairs).
   std::size_t version() const { return _version; }
   double skin() const { return _skin; }
+  /// The cell grid of the last build (null before the first), over the
+  /// positions of that build; spheres have moved less than skin/2 since.
+  const CellGrid* grid() const { return _grid ? &*_grid : nullptr; }
   /// Bytes held by the list.
   std::size_t bytes() const;
   /// The pairs, their contact history and the build state, to a checkpoint.
@@ -119,6 +146,8 @@ private:
   double _skin;
   std::size_t _builds = 0, _version = 0;
   std::vector<double> _x_build;
+  double _cell = 0.0;              // the grid's cell size at the last build
+  std::optional<CellGrid> _grid;
 };
 
 } // namespace dembridge::dem

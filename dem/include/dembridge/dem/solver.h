@@ -6,6 +6,7 @@
 /// step is in forces.h.
 
 #include "dembridge/dem/assembly.h"
+#include "dembridge/dem/body.h"
 #include "dembridge/dem/conditions.h"
 #include "dembridge/dem/forces.h"
 #include "dembridge/dem/neighbours.h"
@@ -25,15 +26,19 @@ namespace dembridge::dem
 struct ForceScratch;
 
 /// Energy budget [J]: kinetic + elastic + softening + breakage + friction +
-/// damping = initial + external_work + prescribed_work.
+/// damping + the rigid bodies' kinetic, contact and friction energies =
+/// initial + external_work + prescribed_work.
 struct DemEnergy
 {
   double initial = 0.0, kinetic = 0.0, elastic = 0.0, softening = 0.0, breakage = 0.0,
          friction = 0.0, damping = 0.0, external_work = 0.0, prescribed_work = 0.0;
+  double body_kinetic = 0.0;  ///< the moving bodies' kinetic energy
+  double body_contact = 0.0;  ///< elastic energy of the sphere-body contacts
+  double body_friction = 0.0; ///< dissipated by sliding on the bodies
   double imbalance() const
   {
-    return kinetic + elastic + softening + breakage + friction + damping - initial
-           - external_work - prescribed_work;
+    return kinetic + elastic + softening + breakage + friction + damping + body_kinetic + body_contact
+           + body_friction - initial - external_work - prescribed_work;
   }
 };
 
@@ -66,6 +71,13 @@ public:
   /// @throws std::runtime_error if no condition has that name.
   void remove_motion(const std::string& name);
   void add_force(ParticleForce f);
+  /// Adds a rigid body (before start()): a projectile the solver moves with
+  /// the spheres' step, or a fixed wall. Returns its index.
+  /// @throws std::runtime_error on a bad shape or mass, or a name in use.
+  std::size_t add_body(RigidBody b);
+  std::size_t bodies() const { return _bodies.size(); }
+  const RigidBody& body(std::size_t k) const { return _bodies.at(k); }
+  const BodyContacts& body_contacts(std::size_t k) const { return _contacts.at(k); }
   /// Computes the initial forces and energy (call after the conditions).
   void start();
   /// One step (begin_step then end_step). @throws std::runtime_error naming
@@ -153,6 +165,13 @@ private:
   // the full step
   void move_hinged(std::size_t motion, double t_half, double t_new, bool begin);
   std::unique_ptr<ForceScratch> _scratch; // the force loop's (force_loop.h, internal)
+  std::vector<RigidBody> _bodies;
+  std::vector<BodyContacts> _contacts; // one per body
+  void kick_bodies(double h);
+  void save_bodies(const checkpoint::Group& g) const;
+  void load_bodies(const checkpoint::Group& g);
+  void drift_bodies();
+  void contact_bodies(double dt);
   double _dt, _c, _t = 0.0;
   std::int64_t _steps = 0;
   double _guard_margin = 0.5;
@@ -160,6 +179,7 @@ private:
   void check_energy() const; // the energy guard
   [[noreturn]] void energy_runaway(double kinetic, double budget) const;
   bool _in_step = false;
+  bool _started = false; // start() called: no more bodies
   DemEnergy _e;
   DemTimings _time;
 };
