@@ -1,12 +1,14 @@
 // The concrete law of the DE model (docs/method.md sections 1.5-1.8), pair by pair,
 // against the closed-form values of the law itself.
 #include "dembridge/dem/law.h"
+#include "dembridge/dem/solver.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <numbers>
 
 using namespace dembridge::dem;
+using Catch::Matchers::WithinAbs;
 using Catch::Matchers::WithinRel;
 
 namespace
@@ -231,4 +233,72 @@ TEST_CASE("trial shear: a link that neither turns nor spins keeps its force exac
   const Vec3 kept = trial_shear(fs, n, n, rotation_minus_identity(none), none, 0.4, ks_d);
   for (int k = 0; k < 3; ++k)
     CHECK(std::abs(kept[k] - fs[k]) < 1e-15 * norm(fs));
+}
+
+TEST_CASE("strain-rate effect: the Malvar-Ross factor", "[dem][rate]")
+{
+  // fc = 48 MPa: delta = 1 / (1 + 8 x 4.8) = 1 / 39.4, beta = 10^(6 delta - 2)
+  const double fc = 48e6, delta = 1.0 / 39.4, beta = std::pow(10.0, 6.0 * delta - 2.0);
+  CHECK(malvar_ross_dif(1e-6, fc) == 1.0);
+  CHECK(malvar_ross_dif(1e-9, fc) == 1.0);
+  CHECK(malvar_ross_dif(-50.0, fc) == 1.0); // compression: no increase
+  CHECK_THAT(malvar_ross_dif(1e-3, fc), WithinRel(std::pow(1e3, delta), 1e-14));
+  CHECK_THAT(malvar_ross_dif(1.0, fc), WithinRel(std::pow(1e6, delta), 1e-14));
+  CHECK_THAT(malvar_ross_dif(100.0, fc), WithinRel(beta * std::cbrt(1e8), 1e-14));
+  // continuous at 1 /s (to the slope of the curve there)
+  CHECK_THAT(malvar_ross_dif(1.0 + 1e-9, fc), WithinRel(malvar_ross_dif(1.0, fc), 1e-8));
+  // the figures of the law for this concrete: 1.42 at 1 /s, 6.59 at 100 /s
+  CHECK_THAT(malvar_ross_dif(1.0, fc), WithinAbs(1.42, 0.005));
+  CHECK_THAT(malvar_ross_dif(100.0, fc), WithinAbs(6.59, 0.01));
+}
+
+TEST_CASE("strain-rate effect: a link pulled at several rates peaks at S T DIF", "[dem][rate]")
+{
+  // Two spheres, a held, b pulled along the link at V = rate x D_init: the
+  // link's strain rate is exactly `rate` once the pull's ramp is over, so
+  // its strength factor is DIF(rate) and the force peaks at S_int T DIF, the
+  // elastic limit, before softening to rupture at (1 + zeta) of it. The
+  // force is sampled at steps of V dt = delta_e / 2000: the peak is within
+  // 1e-3 of the limit (the pull ramped in over the first 100 steps, the
+  // link elastic and its factor that of the final rate). Without the rate
+  // effect the peak is S_int T at every rate. The energy the link
+  // dissipates is the law's at the raised strength (the factor is fixed
+  // once the link softens).
+  for (double rate : {0.5, 30.0, 1000.0})
+    for (bool rated : {true, false})
+    {
+      Material m;
+      m.micro = {0.2, 1.0, 1.0};
+      m.rate_fc = rated ? 48e6 : 0.0;
+      Particles p = make_particles(std::vector<double>{0, 0, 0, 2e-3, 0, 0}, std::vector<double>{1e-3, 1e-3},
+                                   2400.0, 1.0);
+      Links l = create_links(p, 1.01, m);
+      REQUIRE(l.size() == 1);
+      const double S = std::numbers::pi * 1e-6, dif = rated ? malvar_ross_dif(rate, 48e6) : 1.0;
+      const double peak = S * m.tensile * dif, de = peak / l.kn[0], V = rate * l.d0[0];
+      const double dt = de / 2000.0 / V, ramp = 100.0 * dt; // the pull ramped in over 100 steps
+      DemSolver s(p, l, m, dt, 0.0, 1e-4);
+      s.add_motion({"a", {0}, MotionKind::fixed, {true, true, true}, {}});
+      s.add_motion({"b", {1}, MotionKind::velocity, {true, false, false},
+                    [=](double t) { return V * std::min(1.0, t / ramp); }});
+      s.start();
+      double most = 0.0;
+      while (l.state[0] == LinkState::intact)
+      {
+        s.step();
+        most = std::max(most, -p.f[3]); // the link's pull on b, along -x
+      }
+      INFO("rate " << rate << " /s, " << (rated ? "with" : "without") << " the rate effect: peak " << most
+                   << " N, S T DIF " << peak << " N");
+      CHECK_THAT(most, WithinRel(peak, 1e-3));
+      CHECK(l.state[0] == LinkState::broken_tension);
+      if (rated)
+        CHECK_THAT(l.strength[0], WithinRel(dif, 1e-12));
+      // the link dissipated its fracture energy at the raised strength:
+      // S T DIF delta_r / 2, delta_r = (1 + zeta) S T DIF / K_n (a factor
+      // DIF^2 over the quasi-static one), to the sampling's 1e-3
+      const DemEnergy e = s.energy();
+      const double dr = (1.0 + m.zeta) * de;
+      CHECK_THAT(e.softening + e.breakage, WithinRel(0.5 * peak * dr, 1e-3));
+    }
 }

@@ -39,6 +39,8 @@ void Material::validate() const
     impl::out_of_range("internal friction angle phi_i", phi_i_deg, "in [0, 90) degrees");
   if (!(phi_c_deg >= 0.0 && phi_c_deg < 90.0))
     impl::out_of_range("contact friction angle phi_c", phi_c_deg, "in [0, 90) degrees");
+  if (!(rate_fc >= 0.0) || !std::isfinite(rate_fc))
+    impl::out_of_range("strain-rate law's compressive strength f_c", rate_fc, ">= 0 Pa (0 = no rate effect)");
   // eq. [1] must give positive stiffnesses
   (void)link_stiffness(youngs_modulus, poisson_ratio, 1.0, 1.0, micro);
 }

@@ -26,6 +26,11 @@ void DemSolver::update_held()
     for (int k = 0; k < 3; ++k)
       if (_held[6 * i + k])
         _held_dofs.push_back(static_cast<std::int32_t>(3 * i + k));
+  // spheres removed from the computation are held too (no reaction: they
+  // have no link nor contact left)
+  for (std::size_t i = 0; i < _removed.size(); ++i)
+    if (_removed[i])
+      std::fill(&_held[6 * i], &_held[6 * i] + 6, 1);
   _fold.assign(_held_dofs.size(), 0.0);
   _vold.assign(_held_dofs.size(), 0.0);
   _reac.assign(_held_dofs.size(), 0.0);

@@ -27,6 +27,11 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
     law.kn = l.kn[k];
     law.ks = l.ks[k];
     law.s_int = link_surface(p, l, k);
+    if (!l.strength.empty())
+    {
+      law.tensile *= l.strength[k];
+      law.cohesion *= l.strength[k];
+    }
     const double delta = std::sqrt(dot3(d, d)) - l.d0[k];
     const double fn = link_normal_force(delta, l.delta_max[k], law).fn;
     const double wk = l.weight.empty() ? 1.0 : l.weight[k];
@@ -63,6 +68,7 @@ double softening_energy(const Particles& p, const Links& l, const Material& mat)
     law.kn = l.kn[k];
     law.ks = l.ks[k];
     law.s_int = link_surface(p, l, k);
+    law.tensile = mat.tensile * (l.strength.empty() ? 1.0 : l.strength[k]);
     e += (l.weight.empty() ? 1.0 : l.weight[k]) * softening_dissipation(l.delta_max[k], law);
   }
   return e;

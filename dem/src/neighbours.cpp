@@ -12,23 +12,33 @@
 namespace dembridge::dem
 {
 
-CellGrid::CellGrid(std::span<const double> x, double cell)
+CellGrid::CellGrid(std::span<const double> x, double cell, std::span<const std::uint8_t> skip)
 {
   if (!(cell > 0.0))
     throw std::runtime_error("cell grid: cell size " + std::to_string(cell) + " must be > 0");
   const std::size_t n = x.size() / 3;
+  auto kept = [&](std::size_t i) { return skip.empty() || !skip[i]; };
   double hi[3];
+  std::size_t first = 0;
+  while (first < n && !kept(first))
+    ++first;
   for (int k = 0; k < 3; ++k)
   {
-    _lo[k] = n ? x[k] : 0.0;
+    _lo[k] = first < n ? x[3 * first + k] : 0.0;
     hi[k] = _lo[k];
   }
+  std::size_t count = 0;
   for (std::size_t i = 0; i < n; ++i)
+  {
+    if (!kept(i))
+      continue;
+    ++count;
     for (int k = 0; k < 3; ++k)
     {
       _lo[k] = std::min(_lo[k], x[3 * i + k]);
       hi[k] = std::max(hi[k], x[3 * i + k]);
     }
+  }
   // cap the grid size for very spread-out sets (cells stay >= `cell`)
   _h = cell;
   std::size_t total = 1;
@@ -37,7 +47,7 @@ CellGrid::CellGrid(std::span<const double> x, double cell)
     _n[k] = std::max(1, static_cast<int>((hi[k] - _lo[k]) / _h) + 1);
     total *= _n[k];
   }
-  while (total > 4 * n + 64)
+  while (total > 4 * count + 64)
   {
     _h *= 1.26;
     total = 1;
@@ -51,16 +61,19 @@ CellGrid::CellGrid(std::span<const double> x, double cell)
   std::vector<std::size_t> id(n);
   for (std::size_t i = 0; i < n; ++i)
   {
+    if (!kept(i))
+      continue;
     id[i] = (std::size_t(cell_of(x[3 * i], 0)) * _n[1] + cell_of(x[3 * i + 1], 1)) * _n[2]
             + cell_of(x[3 * i + 2], 2);
     ++_start[id[i] + 1];
   }
   for (std::size_t c = 0; c < total; ++c)
     _start[c + 1] += _start[c];
-  _items.resize(n);
+  _items.resize(count);
   std::vector<std::int32_t> fill(_start.begin(), _start.end() - 1);
   for (std::size_t i = 0; i < n; ++i)
-    _items[fill[id[i]]++] = static_cast<std::int32_t>(i);
+    if (kept(i))
+      _items[fill[id[i]]++] = static_cast<std::int32_t>(i);
 }
 
 int CellGrid::cell_of(double v, int k) const
@@ -78,10 +91,10 @@ NeighbourList::NeighbourList(double skin) : _skin(skin)
 }
 
 bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
-                           const Links& links)
+                           const Links& links, std::span<const std::uint8_t> skip)
 {
   const std::size_t np = r.size();
-  if (_builds > 0 && _x_build.size() == x.size())
+  if (_builds > 0 && _x_build.size() == x.size() && !_stale)
   {
     double max2 = 0.0;
 #pragma omp parallel for schedule(static) reduction(max : max2) num_threads(impl::threads_for(np))
@@ -96,7 +109,9 @@ bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
   }
   const double rmax = np ? *std::max_element(r.begin(), r.end()) : 0.0;
   _cell = 2.0 * rmax + _skin;
-  _grid.emplace(x, _cell);
+  _grid.emplace(x, _cell, skip);
+  _stale = false;
+  _skip.assign(skip.begin(), skip.end());
   const CellGrid& grid = *_grid;
   // links sorted by (a, b): those of sphere i as a are a contiguous range
   const std::vector<std::int32_t> first = impl::first_by_a(np, links.a, links.b, "neighbour list: links");
@@ -116,6 +131,8 @@ bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
 #pragma omp for schedule(static)
     for (std::size_t i = 0; i < np; ++i)
     {
+      if (!skip.empty() && skip[i])
+        continue; // left out: not in the grid either
       near.clear();
       grid.for_each_later_near(x, i,
                                [&](std::int32_t j, double d2)

@@ -27,6 +27,84 @@ DemSolver::DemSolver(Particles& p, Links& l, const Material& mat, double dt, dou
     throw std::runtime_error("time step " + std::to_string(dt) + " s: must be > 0");
   set_damping(damping);
   _held.assign(6 * p.size(), 0);
+  _removed.assign(p.size(), 0);
+  if (mat.rate_fc > 0.0 && l.strength.size() != l.size())
+    l.strength.assign(l.size(), 1.0); // the rate effect's per-link factors
+}
+
+void DemSolver::set_domain(const std::array<double, 3>& lo, const std::array<double, 3>& hi)
+{
+  for (int k = 0; k < 3; ++k)
+    if (!(hi[k] > lo[k]) || !std::isfinite(lo[k]) || !std::isfinite(hi[k]))
+      throw std::runtime_error("domain: hi must exceed lo on every axis, both finite (axis " + std::to_string(k)
+                               + ": " + std::to_string(lo[k]) + " to " + std::to_string(hi[k]) + " m)");
+  _domain_set = true;
+  _domain_lo = lo;
+  _domain_hi = hi;
+}
+
+void DemSolver::remove_escaped()
+{
+  // the spheres outside the domain at x(n+1): their velocities are the
+  // half-step ones, v(n+1/2), those they leave with
+  const std::size_t n = _p.size();
+  std::vector<std::int32_t> gone;
+  std::vector<std::uint8_t>& in_condition = _in_condition; // kept: no allocation per step
+  in_condition.assign(n, 0);
+  for (const auto& m : _motions)
+    for (auto i : m.ids)
+      in_condition[i] = 1;
+  for (const auto& f : _forces)
+    for (auto i : f.ids)
+      in_condition[i] = 1;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    if (_removed[i] || in_condition[i])
+      continue;
+    const double* x = &_p.x[3 * i];
+    for (int k = 0; k < 3; ++k)
+      if (x[k] < _domain_lo[k] || x[k] > _domain_hi[k])
+      {
+        gone.push_back(static_cast<std::int32_t>(i));
+        break;
+      }
+  }
+  if (gone.empty())
+    return;
+  // the energy their links and contacts hold goes with them
+  const double before = elastic_energy(_p, _l, _nl, _mat);
+  for (auto i : gone)
+    _removed[i] = 1;
+  for (std::size_t k = 0; k < _l.size(); ++k)
+    if (_l.state[k] == LinkState::intact && (_removed[_l.a[k]] || _removed[_l.b[k]]))
+      _l.state[k] = LinkState::removed;
+  for (std::size_t q = 0; q < _nl.size(); ++q)
+    if (_removed[_nl.a[q]] || _removed[_nl.b[q]])
+    {
+      _nl.touching[q] = 0;
+      for (int k = 0; k < 3; ++k)
+        _nl.fs[3 * q + k] = 0.0;
+    }
+  const double stored = before - elastic_energy(_p, _l, _nl, _mat);
+  double kinetic = 0.0;
+  for (auto i : gone)
+  {
+    const double* v = &_p.v[3 * i];
+    const double* w = &_p.w[3 * i];
+    kinetic += 0.5 * _p.m[i] * dot3(v, v) + 0.5 * _p.inertia[i] * dot3(w, w);
+    _gone.mass += _p.m[i];
+    for (int k = 0; k < 3; ++k)
+    {
+      _gone.momentum[k] += _p.m[i] * v[k];
+      _p.v[3 * i + k] = _p.w[3 * i + k] = 0.0;
+    }
+  }
+  _gone.count += gone.size();
+  _gone.kinetic += kinetic;
+  _gone.elastic += stored;
+  _e.removed += kinetic + stored;
+  update_held(); // holds them
+  _nl.invalidate();
 }
 
 DemSolver::~DemSolver() = default;
@@ -64,7 +142,7 @@ void external(const std::vector<ParticleForce>& forces, double t, std::vector<do
 
 void DemSolver::start()
 {
-  _nl.update(_p.x, _p.r, _l);
+  _nl.update(_p.x, _p.r, _l, _removed);
   compute_forces(_p, _l, _nl, _mat, 0.0, _counters, *_scratch);
   contact_bodies(0.0);
   if (!_forces.empty())
@@ -322,9 +400,15 @@ void DemSolver::end_step()
     external(_forces, t_new, _fext);
   const Drift moved = drift();
   drift_bodies();
+  // fragments leave here, between the drift and the forces: both halves of
+  // a kick with a force between a leaving sphere and another then act on
+  // both (the first, F(n), before; the second, F(n+1), not at all), so
+  // momentum is kept exactly
+  if (_domain_set)
+    remove_escaped();
   const double w_ext = moved.external_work, w_damp = moved.damping;
   const double t1 = omp_get_wtime();
-  _nl.update(_p.x, _p.r, _l);
+  _nl.update(_p.x, _p.r, _l, _removed);
   const double t2 = omp_get_wtime();
   compute_forces(_p, _l, _nl, _mat, dt, _counters, *_scratch);
   contact_bodies(dt);

@@ -75,6 +75,7 @@ void save_links(const Group& g, const Links& l)
     state[k] = static_cast<std::uint8_t>(l.state[k]);
   g.write("state", state);
   g.write("weight", l.weight);
+  g.write("strength", l.strength);
 }
 
 void load_links(const Group& g, Links& l)
@@ -83,7 +84,7 @@ void load_links(const Group& g, Links& l)
   check_same(g, "b", l.b);
   check_same(g, "d0", l.d0);
   for (auto [name, v] : {std::pair{"kn", &l.kn}, {"ks", &l.ks}, {"fs", &l.fs}, {"n", &l.n},
-                         {"delta_max", &l.delta_max}, {"weight", &l.weight}})
+                         {"delta_max", &l.delta_max}, {"weight", &l.weight}, {"strength", &l.strength}})
     read_same_size(g, name, *v);
   std::vector<std::uint8_t> state;
   g.read("state", state);
@@ -91,7 +92,7 @@ void load_links(const Group& g, Links& l)
     g.fail("state", "not one value per link");
   for (std::size_t k = 0; k < l.size(); ++k)
   {
-    if (state[k] > static_cast<std::uint8_t>(LinkState::broken_shear))
+    if (state[k] > static_cast<std::uint8_t>(LinkState::removed))
       g.fail("state", "value " + std::to_string(state[k]) + " is no link state");
     l.state[k] = static_cast<LinkState>(state[k]);
   }
@@ -113,6 +114,8 @@ void NeighbourList::save(const Group& g) const
   g.write_int("version", static_cast<std::int64_t>(_version));
   g.write("skin", _skin);
   g.write("cell", _cell);
+  g.write("skip", _skip);
+  g.write_int("stale", _stale ? 1 : 0);
 }
 
 void NeighbourList::load(const Group& g)
@@ -132,9 +135,11 @@ void NeighbourList::load(const Group& g)
   _builds = static_cast<std::size_t>(g.read_int("builds"));
   _version = static_cast<std::size_t>(g.read_int("version"));
   _cell = g.read_double("cell");
+  g.read("skip", _skip);
+  _stale = g.read_int("stale") != 0;
   // the grid of the last build, from its positions (the constructor is deterministic)
   if (_builds > 0)
-    _grid.emplace(_x_build, _cell);
+    _grid.emplace(_x_build, _cell, _skip);
   else
     _grid.reset();
 }
@@ -210,7 +215,7 @@ void DemSolver::save(const Group& g) const
   g.write("damping", _c);
   const std::vector<double> e{_e.initial,  _e.kinetic, _e.elastic, _e.softening, _e.breakage,
                               _e.friction, _e.damping, _e.external_work, _e.prescribed_work,
-                              _e.body_kinetic, _e.body_contact, _e.body_friction};
+                              _e.body_kinetic, _e.body_contact, _e.body_friction, _e.removed};
   g.write("energy", e);
   const std::vector<double> c{_counters.friction, _counters.breakage, _counters.cohesion_demand,
                               _counters.track_cohesion ? 1.0 : 0.0};
@@ -231,6 +236,9 @@ void DemSolver::save(const Group& g) const
     }
   g.write("hinged", hinged);
   save_bodies(g.group("bodies"));
+  g.write("removed", _removed);
+  g.write("removed_totals", std::vector<double>{double(_gone.count), _gone.mass, _gone.momentum[0], _gone.momentum[1],
+                                                _gone.momentum[2], _gone.kinetic, _gone.elastic});
 }
 
 void DemSolver::load(const Group& g)
@@ -248,6 +256,15 @@ void DemSolver::load(const Group& g)
                       "released: load the state once the run's conditions are those of the checkpoint)");
   load_particles(g.group("particles"), _p);
   load_links(g.group("links"), _l);
+  // the spheres removed from the computation, held again (before the held
+  // dofs' arrays are read: update_held sizes them)
+  read_same_size(g, "removed", _removed);
+  std::vector<double> gone;
+  g.read("removed_totals", gone);
+  if (gone.size() != 7)
+    g.fail("removed_totals", "unexpected length (file damaged?)");
+  _gone = {static_cast<std::size_t>(gone[0]), gone[1], {gone[2], gone[3], gone[4]}, gone[5], gone[6]};
+  update_held();
   _nl.load(g.group("neighbours"));
   _t = g.read_double("time");
   _steps = g.read_int("steps");
@@ -255,9 +272,9 @@ void DemSolver::load(const Group& g)
   std::vector<double> e, c;
   g.read("energy", e);
   g.read("counters", c);
-  if (e.size() != 12 || c.size() != 4)
+  if (e.size() != 13 || c.size() != 4)
     g.fail("energy", "unexpected length (file damaged?)");
-  _e = {e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8], e[9], e[10], e[11]};
+  _e = {e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8], e[9], e[10], e[11], e[12]};
   _counters.friction = c[0];
   _counters.breakage = c[1];
   _counters.cohesion_demand = c[2];
@@ -276,6 +293,7 @@ void DemSolver::load(const Group& g)
       _motion_vprev[q][k] = hinged[6 * q + 2 * k + 1];
     }
   load_bodies(g.group("bodies"));
+
   // the force loop's index structures are rebuilt for the loaded pairs
   _scratch = std::make_unique<ForceScratch>();
 }

@@ -27,6 +27,11 @@ struct Material
   double zeta = 10.0;            ///< softening factor [-]
   double phi_i_deg = 30.0;       ///< internal friction angle [degree]
   double phi_c_deg = 30.0;       ///< contact friction angle [degree]
+  /// Strain-rate effect on the links' strength (docs/method.md section
+  /// 1.6b): 0 = none; else the concrete's compressive strength f_c [Pa] of
+  /// the Malvar-Ross law, whose factor of the link's own tensile strain rate
+  /// multiplies its T and C0 while it is elastic.
+  double rate_fc = 0.0;
   /// @throws std::runtime_error naming the value and its allowed range.
   void validate() const;
   /// The law's parameters for a pair of radii at initial distance d_init.
@@ -78,7 +83,8 @@ enum class LinkState : std::uint8_t
 {
   intact = 0,
   broken_tension = 1,
-  broken_shear = 2
+  broken_shear = 2,
+  removed = 3 ///< one of its spheres left the domain (DemSolver::set_domain)
 };
 
 /// Cohesive links as structure of arrays, each pair ordered a < b, the list
@@ -95,6 +101,11 @@ struct Links
   /// Energy weight of each link (1 - eta at its mid-point, bridging domain):
   /// it multiplies the link's forces and energies. Empty: 1 everywhere.
   std::vector<double> weight;
+  /// Strength factor of each link (the rate effect, Material::rate_fc): its
+  /// T and C0 are multiplied by it; >= 1, the largest dynamic increase
+  /// factor of the link's strain rate while elastic, then fixed. Empty: 1
+  /// everywhere (DemSolver sizes it when the material has a rate effect).
+  std::vector<double> strength;
   std::size_t size() const { return a.size(); }
   std::size_t count(LinkState s) const;
 };

@@ -54,6 +54,15 @@ struct NormalForce
 /// @param delta_max largest elongation reached so far (history; start at 0)
 NormalForce link_normal_force(double delta, double delta_max, const LinkLaw& p);
 
+/// Dynamic increase factor of concrete's tensile strength at the strain rate
+/// `rate` [1/s], Malvar and Ross (1998), for a compressive strength fc [Pa]:
+///   DIF = (rate / rate_s)^delta            rate_s < rate <= 1 /s
+///   DIF = beta (rate / rate_s)^(1/3)       rate > 1 /s
+/// with rate_s = 1e-6 /s, delta = 1 / (1 + 8 fc / fc0), fc0 = 10 MPa,
+/// log10 beta = 6 delta - 2 (continuous at 1 /s); 1 at and below rate_s
+/// (and for compression, rate < 0). docs/method.md section 1.6b.
+double malvar_ross_dif(double rate, double fc);
+
 /// Softening envelope: the force on the loading path at elongation d >= 0.
 double link_envelope(double d, const LinkLaw& p);
 
@@ -226,6 +235,19 @@ inline NormalForce link_normal_force(double delta, double delta_max, const LinkL
   // softened: on the envelope at dm, on the secant below it
   const double f_dm = f_peak - p.kn / p.zeta * (dm - de);
   return {f_dm / dm * delta, dm, NormalState::softening};
+}
+
+inline double malvar_ross_dif(double rate, double fc)
+{
+  constexpr double rate_s = 1e-6, fc0 = 10e6;
+  if (!(rate > rate_s))
+    return 1.0;
+  const double delta = 1.0 / (1.0 + 8.0 * fc / fc0);
+  const double ratio = rate / rate_s;
+  if (rate <= 1.0)
+    return std::pow(ratio, delta);
+  const double beta = std::pow(10.0, 6.0 * delta - 2.0);
+  return beta * std::cbrt(ratio);
 }
 
 inline double softening_dissipation(double delta_max, const LinkLaw& p)

@@ -22,8 +22,10 @@ namespace dembridge::dem
 class CellGrid
 {
 public:
-  /// @param x centres (n, 3); @param cell cell edge [m] (>= the search range)
-  CellGrid(std::span<const double> x, double cell);
+  /// @param x centres (n, 3); @param cell cell edge [m] (>= the search range);
+  /// @param skip one flag per particle (or empty): flagged ones are left
+  /// out (and do not stretch the grid's bounds)
+  CellGrid(std::span<const double> x, double cell, std::span<const std::uint8_t> skip = {});
   /// Calls fn(k0, k1) for the 9 runs [k0, k1) of items() that hold the 27
   /// cells around point p (cells are numbered z fastest, so the three cells
   /// along z of a column are one run).
@@ -76,6 +78,8 @@ public:
       }
   }
   std::size_t bytes() const { return (_start.capacity() + _items.capacity()) * sizeof(std::int32_t); }
+  /// The edge of a cell [m] (the requested size, or more for a spread-out set).
+  double cell_size() const { return _h; }
 
   /// Calls fn(j, d2) for every particle j > i near particle i (same 27
   /// cells), with d2 the squared centre distance; x is the array the grid
@@ -111,7 +115,10 @@ public:
   /// never built). Returns true if it rebuilt. Pairs joined by an intact link
   /// are left out (the link acts there); a pair whose link is broken is
   /// listed, with its link index, like any other.
-  bool update(std::span<const double> x, std::span<const double> r, const Links& links);
+  bool update(std::span<const double> x, std::span<const double> r, const Links& links,
+              std::span<const std::uint8_t> skip = {});
+  /// The next update() rebuilds (spheres were removed from the computation).
+  void invalidate() { _stale = true; }
 
   /// Adds the pairs of links that have just broken (sorted by link index,
   /// hence by (a, b)), with no contact history, so a contact can take over
@@ -147,6 +154,8 @@ private:
   std::size_t _builds = 0, _version = 0;
   std::vector<double> _x_build;
   double _cell = 0.0;              // the grid's cell size at the last build
+  bool _stale = false;             // rebuild at the next update
+  std::vector<std::uint8_t> _skip; // the spheres left out of the last build
   std::optional<CellGrid> _grid;
 };
 

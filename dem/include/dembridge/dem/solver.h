@@ -35,11 +35,24 @@ struct DemEnergy
   double body_kinetic = 0.0;  ///< the moving bodies' kinetic energy
   double body_contact = 0.0;  ///< elastic energy of the sphere-body contacts
   double body_friction = 0.0; ///< dissipated by sliding on the bodies
+  /// Carried away by the spheres that left the domain: their kinetic
+  /// energy and the elastic energy of their links and contacts then.
+  double removed = 0.0;
   double imbalance() const
   {
     return kinetic + elastic + softening + breakage + friction + damping + body_kinetic + body_contact
-           + body_friction - initial - external_work - prescribed_work;
+           + body_friction + removed - initial - external_work - prescribed_work;
   }
+};
+
+/// What the spheres that left the domain carried away.
+struct Removed
+{
+  std::size_t count = 0;
+  double mass = 0.0;                       ///< [kg]
+  std::array<double, 3> momentum{0, 0, 0}; ///< [kg m/s]
+  double kinetic = 0.0;                    ///< translation and rotation [J]
+  double elastic = 0.0;                    ///< in their links and contacts [J]
 };
 
 /// Wall time spent in each part of the steps so far [s].
@@ -76,6 +89,16 @@ public:
   /// @throws std::runtime_error on a bad shape or mass, or a name in use.
   std::size_t add_body(RigidBody b);
   std::size_t bodies() const { return _bodies.size(); }
+  /// The domain: a sphere whose centre leaves the box [lo, hi] at the end of
+  /// a step is removed from the computation (fragments flying off): its
+  /// links (state `removed`) and contacts end, it is held where it is, left
+  /// out of the neighbour grid, and its mass, momentum and energy are booked
+  /// (removed(), DemEnergy::removed). Spheres of a condition are never
+  /// removed. @throws std::runtime_error unless lo < hi on every axis.
+  void set_domain(const std::array<double, 3>& lo, const std::array<double, 3>& hi);
+  const Removed& removed() const { return _gone; }
+  /// 1 for each sphere removed from the computation.
+  const std::vector<std::uint8_t>& removed_flags() const { return _removed; }
   const RigidBody& body(std::size_t k) const { return _bodies.at(k); }
   const BodyContacts& body_contacts(std::size_t k) const { return _contacts.at(k); }
   /// Computes the initial forces and energy (call after the conditions).
@@ -180,6 +203,12 @@ private:
   [[noreturn]] void energy_runaway(double kinetic, double budget) const;
   bool _in_step = false;
   bool _started = false; // start() called: no more bodies
+  // the domain and the spheres that left it
+  bool _domain_set = false;
+  std::array<double, 3> _domain_lo{0, 0, 0}, _domain_hi{0, 0, 0};
+  std::vector<std::uint8_t> _removed, _in_condition;
+  Removed _gone;
+  void remove_escaped();
   DemEnergy _e;
   DemTimings _time;
 };
