@@ -42,6 +42,9 @@ MaterialFile read_material(const std::filesystem::path& file)
   t.phi_i_deg = get("phi_i_deg");
   t.phi_c_deg = get("phi_c_deg");
   m.links_per_sphere = get("links_per_sphere");
+  // optional: the strain-rate effect (absent: none)
+  if (j.contains("rate_fc_pa"))
+    t.rate_fc = get("rate_fc_pa");
   m.lambda = j.value("lambda", 0.0);
   m.macroscopic = j.value("macroscopic", nlohmann::json::object());
   m.calibration = j.value("calibration", nlohmann::json::object());
@@ -73,6 +76,8 @@ void write_material(const std::filesystem::path& file, const MaterialFile& m)
   j["phi_i_deg"] = t.phi_i_deg;
   j["phi_c_deg"] = t.phi_c_deg;
   j["links_per_sphere"] = m.links_per_sphere;
+  if (t.rate_fc > 0.0)
+    j["rate_fc_pa"] = t.rate_fc;
   j["lambda"] = m.lambda;
   j["macroscopic"] = m.macroscopic;
   j["calibration"] = m.calibration;
