@@ -71,10 +71,34 @@ void DemSolver::remove_escaped()
   }
   if (gone.empty())
     return;
-  // the energy their links and contacts hold goes with them
-  const double before = elastic_energy(_p, _l, _nl, _mat);
+  // the energy their links and contacts (with spheres and bodies) hold
+  // goes with them
+  auto stored_energy = [&]
+  {
+    double e = elastic_energy(_p, _l, _nl, _mat);
+    for (std::size_t k = 0; k < _bodies.size(); ++k)
+      e += body_contact_energy(_p, _bodies[k], _contacts[k], _mat);
+    return e;
+  };
+  const double before = stored_energy();
   for (auto i : gone)
     _removed[i] = 1;
+  for (auto& c : _contacts)
+  {
+    // their contacts with the bodies end (and they are examined no more)
+    std::size_t kept = 0;
+    for (std::size_t h = 0; h < c.ids.size(); ++h)
+      if (!_removed[c.ids[h]])
+      {
+        c.ids[kept] = c.ids[h];
+        for (int k = 0; k < 3; ++k)
+          c.fs[3 * kept + k] = c.fs[3 * h + k];
+        ++kept;
+      }
+    c.ids.resize(kept);
+    c.fs.resize(3 * kept);
+    std::erase_if(c.near, [&](std::int32_t i) { return _removed[i] != 0; });
+  }
   for (std::size_t k = 0; k < _l.size(); ++k)
     if (_l.state[k] == LinkState::intact && (_removed[_l.a[k]] || _removed[_l.b[k]]))
       _l.state[k] = LinkState::removed;
@@ -85,7 +109,7 @@ void DemSolver::remove_escaped()
       for (int k = 0; k < 3; ++k)
         _nl.fs[3 * q + k] = 0.0;
     }
-  const double stored = before - elastic_energy(_p, _l, _nl, _mat);
+  const double stored = before - stored_energy();
   double kinetic = 0.0;
   for (auto i : gone)
   {
