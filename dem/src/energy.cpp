@@ -27,7 +27,7 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
     law.kn = l.kn[k];
     law.ks = l.ks[k];
     law.s_int = link_surface(p, l, k);
-    if (!l.strength.empty())
+    if (l.strength.size() == l.size() && !l.strength.empty())
     {
       law.tensile *= l.strength[k];
       law.cohesion *= l.strength[k];
@@ -68,7 +68,7 @@ double softening_energy(const Particles& p, const Links& l, const Material& mat)
     law.kn = l.kn[k];
     law.ks = l.ks[k];
     law.s_int = link_surface(p, l, k);
-    law.tensile = mat.tensile * (l.strength.empty() ? 1.0 : l.strength[k]);
+    law.tensile = mat.tensile * (l.strength.size() == l.size() && !l.strength.empty() ? l.strength[k] : 1.0);
     e += (l.weight.empty() ? 1.0 : l.weight[k]) * softening_dissipation(l.delta_max[k], law);
   }
   return e;

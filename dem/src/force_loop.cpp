@@ -212,7 +212,10 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   const LinkLaw base = mat.law(1.0, 1.0, 1.0);
   const ContactFactors cf = contact_factors(mat);
   const bool weighted_links = !l.weight.empty(), weighted_spheres = !p.weight.empty();
-  const bool rated = mat.rate_fc > 0.0 && l.strength.size() == l.size() && dt > 0.0;
+  // the links' strength factors apply whenever they are sized; they follow
+  // the strain rate only over a step (dt > 0: the velocities are v(n+1/2))
+  const bool factored = l.strength.size() == l.size() && !l.strength.empty();
+  const bool rated = factored && mat.rate_fc > 0.0 && dt > 0.0;
   const double* rad = p.r.data();
   bool short_team = false;
   std::size_t spinning = np; // a sphere turning by more than 1 rad in the step
@@ -258,19 +261,21 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     // cache line per link (measured: 5 % slower at 200k spheres)
     law.s_int = pair_surface(rec[record * i + 3], rec[record * l.b[k] + 3]);
     const double delta = D - l.d0[k];
-    if (rated)
+    double factor = 1.0;
+    if (factored)
     {
       // the rate effect: while the link is elastic, its strength factor
       // follows the largest Malvar-Ross factor of its tensile strain rate
       // (v(n+1/2) of its spheres along the normal, over D_init)
       double& f = l.strength[k];
-      if (l.delta_max[k] * law.kn <= law.s_int * law.tensile * f)
+      if (rated && l.delta_max[k] * law.kn <= law.s_int * law.tensile * f)
       {
         const double* va = &p.v[3 * i];
         const double* vb = &p.v[3 * l.b[k]];
         const double rate = ((vb[0] - va[0]) * n[0] + (vb[1] - va[1]) * n[1] + (vb[2] - va[2]) * n[2]) / l.d0[k];
         f = std::max(f, malvar_ross_dif(rate, mat.rate_fc));
       }
+      factor = f;
       law.tensile *= f;
       law.cohesion *= f;
     }
@@ -293,11 +298,12 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       // the cap with C0 = the demand before this call; beyond it, this
       // thread's demand grows
       const double f2 = dot3(trial.data(), trial.data());
-      const double room = law.s_int * demand_before - nf.fn * law.tan_phi_i;
+      // (in units of the base C0: the link's cap is its factor times C0)
+      const double room = law.s_int * demand_before * factor - nf.fn * law.tan_phi_i;
       if (f2 > 0.0 && (room < 0.0 || f2 > room * room))
       {
         double& dm = s.demand[8 * omp_get_thread_num()];
-        dm = std::max(dm, (std::sqrt(f2) + nf.fn * law.tan_phi_i) / law.s_int);
+        dm = std::max(dm, (std::sqrt(f2) + nf.fn * law.tan_phi_i) / (law.s_int * factor));
       }
     }
     if (sf.exceeded)

@@ -28,8 +28,12 @@ DemSolver::DemSolver(Particles& p, Links& l, const Material& mat, double dt, dou
   set_damping(damping);
   _held.assign(6 * p.size(), 0);
   _removed.assign(p.size(), 0);
+  // the rate effect's per-link factors (none without it: a reused set of
+  // links loses factors of an earlier run)
   if (mat.rate_fc > 0.0 && l.strength.size() != l.size())
-    l.strength.assign(l.size(), 1.0); // the rate effect's per-link factors
+    l.strength.assign(l.size(), 1.0);
+  else if (!(mat.rate_fc > 0.0))
+    l.strength.clear();
 }
 
 void DemSolver::set_domain(const std::array<double, 3>& lo, const std::array<double, 3>& hi)
@@ -127,7 +131,10 @@ void DemSolver::remove_escaped()
   _gone.kinetic += kinetic;
   _gone.elastic += stored;
   _e.removed += kinetic + stored;
-  update_held(); // holds them
+  // held from now on; the held dofs of the conditions (and their
+  // histories of this step, for the reactions) are unchanged
+  for (auto i : gone)
+    std::fill(&_held[6 * i], &_held[6 * i] + 6, 1);
   _nl.invalidate();
 }
 
