@@ -261,7 +261,6 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     // cache line per link (measured: 5 % slower at 200k spheres)
     law.s_int = pair_surface(rec[record * i + 3], rec[record * l.b[k] + 3]);
     const double delta = D - l.d0[k];
-    double factor = 1.0;
     if (factored)
     {
       // the rate effect: while the link is elastic, its strength factor
@@ -275,7 +274,6 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
         const double rate = ((vb[0] - va[0]) * n[0] + (vb[1] - va[1]) * n[1] + (vb[2] - va[2]) * n[2]) / l.d0[k];
         f = std::max(f, malvar_ross_dif(rate, mat.rate_fc));
       }
-      factor = f;
       law.tensile *= f;
       law.cohesion *= f;
     }
@@ -299,6 +297,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       // thread's demand grows
       const double f2 = dot3(trial.data(), trial.data());
       // (in units of the base C0: the link's cap is its factor times C0)
+      const double factor = factored ? l.strength[k] : 1.0;
       const double room = law.s_int * demand_before * factor - nf.fn * law.tan_phi_i;
       if (f2 > 0.0 && (room < 0.0 || f2 > room * room))
       {
