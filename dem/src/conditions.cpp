@@ -14,6 +14,14 @@ using impl::dot3;
 
 void DemSolver::update_held()
 {
+  // the spheres of a condition or load (never removed from the domain)
+  _in_condition.assign(_p.size(), 0);
+  for (const auto& m : _motions)
+    for (auto i : m.ids)
+      _in_condition[i] = 1;
+  for (const auto& f : _forces)
+    for (auto i : f.ids)
+      _in_condition[i] = 1;
   std::fill(_held.begin(), _held.end(), 0);
   for (const auto& m : _motions)
     if (!m.hinged()) // a hinged set moves as a plate
@@ -129,6 +137,8 @@ void DemSolver::add_force(ParticleForce f)
                                      + " of the loading plate moves with the hinged condition '" + o.name
                                      + "'; a plate's spheres must move freely");
   }
+  for (auto i : f.ids)
+    _in_condition[i] = 1;
   _forces.push_back(std::move(f));
   // external force arrays only once there is an external force
   _fext.resize(3 * _p.size(), 0.0);

@@ -28,6 +28,7 @@ DemSolver::DemSolver(Particles& p, Links& l, const Material& mat, double dt, dou
   set_damping(damping);
   _held.assign(6 * p.size(), 0);
   _removed.assign(p.size(), 0);
+  _in_condition.assign(p.size(), 0);
   // the rate effect's per-link factors (none without it: a reused set of
   // links loses factors of an earlier run)
   if (mat.rate_fc > 0.0 && l.strength.size() != l.size())
@@ -53,17 +54,9 @@ void DemSolver::remove_escaped()
   // half-step ones, v(n+1/2), those they leave with
   const std::size_t n = _p.size();
   std::vector<std::int32_t> gone;
-  std::vector<std::uint8_t>& in_condition = _in_condition; // kept: no allocation per step
-  in_condition.assign(n, 0);
-  for (const auto& m : _motions)
-    for (auto i : m.ids)
-      in_condition[i] = 1;
-  for (const auto& f : _forces)
-    for (auto i : f.ids)
-      in_condition[i] = 1;
   for (std::size_t i = 0; i < n; ++i)
   {
-    if (_removed[i] || in_condition[i])
+    if (_removed[i] || _in_condition[i]) // (_in_condition: set with the conditions, update_held)
       continue;
     const double* x = &_p.x[3 * i];
     for (int k = 0; k < 3; ++k)

@@ -35,26 +35,26 @@ template <typename T> void check_same(const Group& g, const std::string& name, c
                  "options of the run that wrote it)");
 }
 
+/// The particle arrays a step changes (r is checked, quantum compared).
+template <typename P> auto particle_arrays(P& p) // P: Particles or const Particles
+{
+  using A = decltype(&p.x);
+  return std::vector<std::pair<const char*, A>>{{"x", &p.x},  {"x0", &p.x0}, {"v", &p.v},       {"w", &p.w},          {"f", &p.f},
+          {"t", &p.t}, {"m", &p.m},   {"inertia", &p.inertia}, {"weight", &p.weight}};
+}
+
 void save_particles(const Group& g, const Particles& p)
 {
-  g.write("x", p.x);
-  g.write("x0", p.x0);
-  g.write("v", p.v);
-  g.write("w", p.w);
-  g.write("f", p.f);
-  g.write("t", p.t);
+  for (auto [name, v] : particle_arrays(p))
+    g.write(name, *v);
   g.write("r", p.r);
-  g.write("m", p.m);
-  g.write("inertia", p.inertia);
-  g.write("weight", p.weight);
   g.write("quantum", p.quantum);
 }
 
 void load_particles(const Group& g, Particles& p)
 {
   check_same(g, "r", p.r);
-  for (auto [name, v] : {std::pair{"x", &p.x}, {"x0", &p.x0}, {"v", &p.v}, {"w", &p.w}, {"f", &p.f},
-                         {"t", &p.t}, {"m", &p.m}, {"inertia", &p.inertia}, {"weight", &p.weight}})
+  for (auto [name, v] : particle_arrays(p))
     read_same_size(g, name, *v);
   if (g.read_double("quantum") != p.quantum)
     g.fail("quantum", "differs from this run's (another assembly)");
