@@ -430,10 +430,10 @@ TEST_CASE("projectile into a free bonded block: momentum kept, energy budget clo
       a[1] += p.m[i] * (x[2] * v[0] - x[0] * v[2]) + p.inertia[i] * p.w[3 * i + 1];
       a[2] += p.m[i] * (x[0] * v[1] - x[1] * v[0]) + p.inertia[i] * p.w[3 * i + 2];
     }
-    const RigidBody& b = s.body(0);
-    a[0] += b.mass * (b.x[1] * b.v[2] - b.x[2] * b.v[1]) + b.L[0];
-    a[1] += b.mass * (b.x[2] * b.v[0] - b.x[0] * b.v[2]) + b.L[1];
-    a[2] += b.mass * (b.x[0] * b.v[1] - b.x[1] * b.v[0]) + b.L[2];
+    const RigidBody& q = s.body(0);
+    a[0] += q.mass * (q.x[1] * q.v[2] - q.x[2] * q.v[1]) + q.L[0];
+    a[1] += q.mass * (q.x[2] * q.v[0] - q.x[0] * q.v[2]) + q.L[1];
+    a[2] += q.mass * (q.x[0] * q.v[1] - q.x[1] * q.v[0]) + q.L[2];
     return a;
   };
   const V3 q0 = momentum(), a0 = angular();

@@ -90,7 +90,11 @@ TEST_CASE("contacts: push only, Coulomb friction cap", "[dem][law]")
   auto s = contact_shear_force({0, 0, 0}, {0, 2 * cap / p.ks, 0}, fn, p);
   CHECK(s.exceeded);
   CHECK_THAT(norm(s.fs), WithinRel(cap, 1e-14));
-  CHECK_THAT(s.slip_energy, WithinRel(cap * cap / p.ks, 1e-12)); // cap x slip (slip = cap/ks)
+  // sliding starts from rest: the mean force cap/2 over the slip cap/ks
+  CHECK_THAT(s.slip_energy, WithinRel(0.5 * cap * cap / p.ks, 1e-12));
+  // sliding goes on at the cap: cap x slip
+  auto g = contact_shear_force(s.fs, {0, 0.3 * cap / p.ks, 0}, fn, p);
+  CHECK_THAT(g.slip_energy, WithinRel(0.3 * cap * cap / p.ks, 1e-12));
   auto t = contact_shear_force({0, 0, 0}, {0, 0.5 * cap / p.ks, 0}, fn, p);
   CHECK(!t.exceeded);
   CHECK(t.slip_energy == 0.0);

@@ -166,6 +166,58 @@ V3 mat_t_vec(const std::array<double, 9>& M, const V3& x)
 
 // ---- Shape -----------------------------------------------------------------------
 
+SurfaceMesh body_surface(const Shape& s, int rings, int segments)
+{
+  if (s.kind != Shape::Kind::projectile)
+    throw std::runtime_error("body_surface: only a projectile has a surface mesh");
+  if (rings < 1 || segments < 3)
+    throw std::runtime_error("body_surface: rings >= 1 and segments >= 3");
+  // the sections along the axis, tip (a = 0) to tail (a = -length)
+  const double Ln = s.nose_length();
+  std::vector<double> a;
+  if (Ln > 0.0)
+    for (int k = 0; k <= rings; ++k)
+      a.push_back(-Ln * k / rings);
+  else
+    a.push_back(0.0);
+  a.push_back(-s.length);
+  SurfaceMesh m;
+  auto vertex = [&](double ax, double r, double phi)
+  {
+    m.x.insert(m.x.end(), {ax, r * std::cos(phi), r * std::sin(phi)});
+    return static_cast<std::int32_t>(m.vertices() - 1);
+  };
+  auto tri = [&](std::int32_t i, std::int32_t j, std::int32_t k) { m.triangles.insert(m.triangles.end(), {i, j, k}); };
+  const std::int32_t tip = vertex(0.0, 0.0, 0.0), n = segments;
+  std::vector<std::int32_t> prev(n, tip);
+  for (double ak : a)
+  {
+    const double r = radius_at(s, ak);
+    if (r <= 0.0)
+      continue; // the tip's section is the tip itself
+    std::vector<std::int32_t> ring(n);
+    for (int j = 0; j < n; ++j)
+      ring[j] = vertex(ak, r, 2.0 * std::numbers::pi * j / n);
+    for (int j = 0; j < n; ++j)
+    {
+      const int j1 = (j + 1) % n;
+      // counter-clockwise seen from outside (towards the tip is +x)
+      if (prev[j] == prev[j1]) // a fan round a point
+        tri(prev[j], ring[j], ring[j1]);
+      else
+      {
+        tri(prev[j], ring[j1], prev[j1]);
+        tri(prev[j], ring[j], ring[j1]);
+      }
+    }
+    prev = ring;
+  }
+  const std::int32_t tail = vertex(-s.length, 0.0, 0.0);
+  for (int j = 0; j < n; ++j)
+    tri(prev[j], tail, prev[(j + 1) % n]);
+  return m;
+}
+
 double Shape::nose_length() const
 {
   const double R = 0.5 * diameter;
@@ -411,10 +463,16 @@ void body_forces(Particles& p, RigidBody& b, BodyContacts& c, const NeighbourLis
     const double ri = p.r[i], delta = ri - D.d;
     while (h < c.ids.size() && c.ids[h] < i)
       ++h;
-    if (!(delta > 0.0))
-      continue;
-    const V3 n = mat_vec(b.R, D.n); // outward from the body, towards the sphere
     const double kn = body_contact_stiffness(m, ri), ks = cs * kn, Fn = kn * delta;
+    if (!(delta > 0.0))
+    {
+      // a contact that opens: its cap fell to zero, the shear spring's
+      // energy went by sliding
+      if (h < c.ids.size() && c.ids[h] == i)
+        c.friction_work += 0.5 * dot3(&c.fs[3 * h], &c.fs[3 * h]) / ks;
+      continue;
+    }
+    const V3 n = mat_vec(b.R, D.n); // outward from the body, towards the sphere
     const double arm = ri - 0.5 * delta; // centre to contact point
     const V3 cp{xi[0] - arm * n[0], xi[1] - arm * n[1], xi[2] - arm * n[2]};
     // relative velocity of the sphere's surface over the body's at the contact point
@@ -439,14 +497,21 @@ void body_forces(Particles& p, RigidBody& b, BodyContacts& c, const NeighbourLis
         for (int k = 0; k < 3; ++k)
           f[k] *= mag / now;
     }
+    const V3 f0 = f;
     for (int k = 0; k < 3; ++k)
       f[k] -= ks * (vr[k] - vn * n[k]) * dt;
     const double cap = b.friction * Fn, mag = std::hypot(f[0], f[1], f[2]);
     if (mag > cap)
     {
-      c.friction_work += (mag - cap) * cap / ks; // the slip over the step times the force
+      const V3 trial = f;
       for (int k = 0; k < 3; ++k)
         f[k] = mag > 0.0 ? f[k] * cap / mag : 0.0;
+      // the mean force's work over the increment less the spring's gain
+      // (dem::contact_shear_force)
+      double e = 0.0;
+      for (int k = 0; k < 3; ++k)
+        e += (f0[k] + f[k]) * (trial[k] - f[k]);
+      c.friction_work += 0.5 * e / ks;
     }
     V3 F;
     for (int k = 0; k < 3; ++k)

@@ -277,19 +277,25 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       law.tensile *= f;
       law.cohesion *= f;
     }
-    const NormalForce nf = link_normal_force(delta, l.delta_max[k], law);
+    const double delta_max_old = l.delta_max[k];
+    const NormalForce nf = link_normal_force(delta, delta_max_old, law);
     double* fs_old = &l.fs[3 * k];
     const double wk = weighted_links ? l.weight[k] : 1.0;
     l.delta_max[k] = nf.delta_max;
+    // A link that breaks in this step: its force is zero at the step's end,
+    // so the energy it releases is what it stored at the start plus the work
+    // of its force over the step, trapezoidal as the velocity-Verlet kicks
+    // apply it (zero at the end): for the shear spring,
+    // |fs_old|^2 / (2 K_s) + fs_old . du / 2 = fs_old . fs_trial / (2 K_s).
+    const Vec3 trial{n[4], n[5], n[6]};
     if (nf.state == NormalState::broken)
     {
       l.state[k] = LinkState::broken_tension;
-      s.broken[omp_get_thread_num()].emplace_back(k, wk * 0.5 * dot3(fs_old, fs_old) / law.ks);
+      s.broken[omp_get_thread_num()].emplace_back(k, wk * 0.5 * dot3(fs_old, trial.data()) / law.ks);
       std::fill(fs_old, fs_old + 3, 0.0);
       std::fill(out, out + 6, 0.0);
       return false;
     }
-    const Vec3 trial{n[4], n[5], n[6]};
     const ShearForce sf = link_shear_cap(trial, nf.fn, law);
     if (track)
     {
@@ -310,8 +316,17 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       // Mohr-Coulomb reached: the link breaks and its elastic energy is
       // released; if the spheres touch, a contact takes over from zero shear.
       l.state[k] = LinkState::broken_shear;
+      // The normal spring likewise releases fn_old delta / 2 (what it
+      // stored, elastic or on the secant, plus the work fn_old (delta -
+      // delta_old) / 2), the elongation at the step's start from the
+      // drift, delta_old = delta - dt (v_b - v_a) . n with v(n+1/2).
+      const double* va = &p.v[3 * i];
+      const double* vb = &p.v[3 * l.b[k]];
+      const double delta_old =
+          delta - dt * ((vb[0] - va[0]) * n[0] + (vb[1] - va[1]) * n[1] + (vb[2] - va[2]) * n[2]);
+      const double fn_old = link_normal_force(delta_old, delta_max_old, law).fn;
       s.broken[omp_get_thread_num()].emplace_back(
-          k, wk * (0.5 * nf.fn * delta + 0.5 * dot3(sf.fs.data(), sf.fs.data()) / law.ks));
+          k, wk * (0.5 * fn_old * delta + 0.5 * dot3(fs_old, trial.data()) / law.ks));
       std::fill(fs_old, fs_old + 3, 0.0);
       std::fill(out, out + 6, 0.0);
       return false;
@@ -404,6 +419,14 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     double* fs_old = &nl.fs[3 * q];
     if (D >= rs) // (a listed pair never has an intact link: NeighbourList)
     {
+      if (nl.touching[q])
+      {
+        // the contact opens: its cap fell to zero, so the shear spring's
+        // energy went by sliding (friction)
+        const double kn = mat.youngs_modulus * pair_surface(rad[i], rad[j]) / rs * cf.cn;
+        const double wq = weighted_spheres ? 0.5 * (p.weight[i] + p.weight[j]) : 1.0;
+        s.pair_slip[q] = wq * 0.5 * (fs_old[0] * fs_old[0] + fs_old[1] * fs_old[1] + fs_old[2] * fs_old[2]) / (kn * cf.cs);
+      }
       nl.touching[q] = 0;
       std::fill(fs_old, fs_old + 3, 0.0);
       std::fill(out, out + 6, 0.0);
@@ -420,7 +443,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
                                    rotation_minus_identity(load_rotation(rec + record * i)),
                                    load_rotation(rec + record * j),
                                    rad[i] / rs, law.ks * D);
-    const ShearForce sf = contact_shear_cap(trial, fn, law);
+    const ShearForce sf = contact_shear_cap(trial, fn, law, fs_prev);
     const double wq = weighted_spheres ? 0.5 * (p.weight[i] + p.weight[j]) : 1.0;
     s.pair_slip[q] = wq * sf.slip_energy;
     for (int k = 0; k < 3; ++k)

@@ -92,10 +92,29 @@ void ParticleWriter::close()
   }
 }
 
-void ParticleWriter::write(double t, const Particles& p, const Links& l)
+void ParticleWriter::add_surface(const std::string& name, SurfaceMesh mesh)
 {
   if (_file < 0)
     throw std::runtime_error("ParticleWriter: file closed");
+  if (name.empty() || name == "particles" || name == "cracks" || name.find_first_of("/. ") != std::string::npos)
+    throw std::runtime_error("ParticleWriter: surface name '" + name + "': not empty, particles or cracks, no '/', '.' or ' '");
+  for (const auto& q : _surfaces)
+    if (q.name == name)
+      throw std::runtime_error("ParticleWriter: surface '" + name + "' added twice");
+  const std::string set = "/" + name + "_triangles";
+  if (H5Lexists(_file, set.c_str(), H5P_DEFAULT) <= 0) // a resumed series has it
+    write_dataset(_file, set, mesh.triangles.data(), H5T_NATIVE_INT32, {mesh.triangles.size() / 3, 3});
+  _surfaces.push_back({name, std::move(mesh)});
+  write_xdmf();
+}
+
+void ParticleWriter::write(double t, const Particles& p, const Links& l, std::span<const RigidBody> bodies)
+{
+  if (_file < 0)
+    throw std::runtime_error("ParticleWriter: file closed");
+  if (bodies.size() != _surfaces.size())
+    throw std::runtime_error("ParticleWriter: " + std::to_string(bodies.size()) + " bodies for "
+                             + std::to_string(_surfaces.size()) + " surfaces");
   const std::size_t n = p.size(), k = _times.size();
   const std::string g = "/frame_" + std::to_string(k) + "/";
   std::vector<double> u(3 * n), damage(n, 0.0);
@@ -119,6 +138,28 @@ void ParticleWriter::write(double t, const Particles& p, const Links& l)
   write_dataset(_file, g + "damage", damage.data(), H5T_NATIVE_DOUBLE, {n});
   if (_cracks)
     write_dataset(_file, g + "broken_links", broken.data(), H5T_NATIVE_INT32, {broken.size() / 2, 2});
+  for (std::size_t s = 0; s < _surfaces.size(); ++s)
+  {
+    const RigidBody& b = bodies[s];
+    const SurfaceMesh& mesh = _surfaces[s].mesh;
+    const auto w = b.fixed ? std::array<double, 3>{0, 0, 0} : b.omega();
+    std::vector<double> x(mesh.x.size()), v(mesh.x.size());
+    for (std::size_t i = 0; i < mesh.vertices(); ++i)
+    {
+      // world velocity v + omega x (x - x_c)
+      const auto xw = b.to_world({mesh.x[3 * i], mesh.x[3 * i + 1], mesh.x[3 * i + 2]});
+      const std::array<double, 3> d{xw[0] - b.x[0], xw[1] - b.x[1], xw[2] - b.x[2]};
+      const std::array<double, 3> wd{w[1] * d[2] - w[2] * d[1], w[2] * d[0] - w[0] * d[2], w[0] * d[1] - w[1] * d[0]};
+      for (int c = 0; c < 3; ++c)
+      {
+        x[3 * i + c] = xw[c];
+        v[3 * i + c] = b.v[c] + wd[c];
+      }
+    }
+    const std::string name = g + _surfaces[s].name + "_";
+    write_dataset(_file, name + "position", x.data(), H5T_NATIVE_DOUBLE, {mesh.vertices(), 3});
+    write_dataset(_file, name + "velocity", v.data(), H5T_NATIVE_DOUBLE, {mesh.vertices(), 3});
+  }
   H5Fflush(_file, H5F_SCOPE_GLOBAL);
   _times.push_back(t);
   _broken_count.push_back(broken.size() / 2);
@@ -172,6 +213,26 @@ void ParticleWriter::write_xdmf() const
       x << "  <Geometry GeometryType=\"XYZ\">\n   <DataItem Dimensions=\"" << _n
         << " 3\" Format=\"HDF\" NumberType=\"Float\" Precision=\"8\">" << h5 << ":/frame_" << k
         << "/position</DataItem>\n  </Geometry>\n </Grid>\n";
+    }
+    x << "</Grid>\n";
+  }
+  for (const auto& surface : _surfaces)
+  {
+    const std::size_t nv = surface.mesh.vertices(), nt = surface.mesh.triangles.size() / 3;
+    const std::string& name = surface.name;
+    x << "<Grid Name=\"" << name << "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    for (std::size_t k = 0; k < _times.size(); ++k)
+    {
+      const std::string at = h5 + ":/frame_" + std::to_string(k) + "/" + name + "_";
+      x << " <Grid Name=\"" << name << "\" GridType=\"Uniform\">\n  <Time Value=\"" << _times[k] << "\"/>\n"
+        << "  <Topology TopologyType=\"Triangle\" NumberOfElements=\"" << nt << "\">\n   <DataItem Dimensions=\""
+        << nt << " 3\" Format=\"HDF\" NumberType=\"Int\" Precision=\"4\">" << h5 << ":/" << name
+        << "_triangles</DataItem>\n  </Topology>\n"
+        << "  <Geometry GeometryType=\"XYZ\">\n   <DataItem Dimensions=\"" << nv
+        << " 3\" Format=\"HDF\" NumberType=\"Float\" Precision=\"8\">" << at << "position</DataItem>\n  </Geometry>\n"
+        << "  <Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\">\n   <DataItem Dimensions=\"" << nv
+        << " 3\" Format=\"HDF\" NumberType=\"Float\" Precision=\"8\">" << at << "velocity</DataItem>\n  </Attribute>\n"
+        << " </Grid>\n";
     }
     x << "</Grid>\n";
   }

@@ -83,8 +83,9 @@ checkpoint::File Checkpointer::open_restart() const
     const std::string was = stored.contains(name) ? stored[name].get<std::string>() : "(not an option then)";
     if (was != value.get<std::string>())
       throw std::runtime_error(name + ": '" + value.get<std::string>() + "' differs from the checkpointed run's '"
-                               + was + "' (" + _o.restart + "): a restart continues the same run; give "
-                               + name + " " + was);
+                               + was + "' (" + _o.restart + "): a restart continues the same run; "
+                               + (name.starts_with("--") ? "give " + name + " " + was
+                                                         : "set " + name + " = " + was + " (scenario file or --set)"));
   }
   return f;
 }

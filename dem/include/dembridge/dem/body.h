@@ -133,6 +133,21 @@ struct BodyContacts
   double friction_work = 0.0;               ///< energy dissipated by sliding [J]
 };
 
+/// A closed triangulated surface (for output): vertices (n, 3) and
+/// triangles (m, 3) of vertex indices, outward-oriented.
+struct SurfaceMesh
+{
+  std::vector<double> x;
+  std::vector<std::int32_t> triangles;
+  std::size_t vertices() const { return x.size() / 3; }
+};
+
+/// The surface of a projectile in its own frame: `rings` sections along the
+/// nose (and the shank's two ends), each of `segments` points round the axis
+/// on the exact section radius; closed at the tip (a point, or the flat
+/// face) and at the tail. @throws unless the shape is a projectile.
+SurfaceMesh body_surface(const Shape& s, int rings = 24, int segments = 32);
+
 /// World bounding box of a body (planes: unbounded but along an axis normal).
 std::pair<std::array<double, 3>, std::array<double, 3>> bounding_box(const RigidBody& b);
 

@@ -161,10 +161,15 @@ double contact_normal_force(double distance, double radius_sum, double kn);
 
 /// Incremental Coulomb friction of a contact: fs_trial = fs - K_s du_s,
 /// |fs| <= F_c tan(phi_c); on sliding fs is scaled back to the cap and the
-/// dissipated energy (cap x slip) is returned.
+/// energy dissipated over the increment is returned: the work of the mean
+/// shear force over the increment, (fs + fs_new) . du / 2, less the change
+/// of the spring's energy, that is (fs + fs_new) . (fs_trial - fs_new) /
+/// (2 K_s) -- cap x slip when sliding goes on at the cap, half that in the
+/// step where sliding starts from rest, 0 without a cap (phi_c = 0).
 ShearForce contact_shear_force(const Vec3& fs, const Vec3& du_s, double fn, const LinkLaw& p);
-/// The same cap applied to a trial force already computed (trial_shear).
-ShearForce contact_shear_cap(const Vec3& fs_trial, double fn, const LinkLaw& p);
+/// The same cap applied to a trial force already computed (trial_shear);
+/// fs_prev: the force of the previous step (for the dissipated energy).
+ShearForce contact_shear_cap(const Vec3& fs_trial, double fn, const LinkLaw& p, const Vec3& fs_prev);
 
 /// Torques from a shear force fs acting on b (and -fs on a) at the contact
 /// point, which lies at l_a n from a's centre and -l_b n from b's (n the unit
@@ -381,10 +386,10 @@ inline double contact_normal_force(double distance, double radius_sum, double kn
 inline ShearForce contact_shear_force(const Vec3& fs, const Vec3& du_s, double fn, const LinkLaw& p)
 {
   return contact_shear_cap({fs[0] - p.ks * du_s[0], fs[1] - p.ks * du_s[1], fs[2] - p.ks * du_s[2]},
-                           fn, p);
+                           fn, p, fs);
 }
 
-inline ShearForce contact_shear_cap(const Vec3& fs_trial, double fn, const LinkLaw& p)
+inline ShearForce contact_shear_cap(const Vec3& fs_trial, double fn, const LinkLaw& p, const Vec3& fs_prev)
 {
   ShearForce out{fs_trial, false, 0.0};
   const double cap = std::max(-fn, 0.0) * p.tan_phi_c;
@@ -394,10 +399,13 @@ inline ShearForce contact_shear_cap(const Vec3& fs_trial, double fn, const LinkL
     const double mag = std::sqrt(mag2);
     out.exceeded = true;
     const double scale = mag > 0.0 ? cap / mag : 0.0;
-    // slip = (mag - cap) / ks against the capped force
-    out.slip_energy = cap * (mag - cap) / p.ks;
     for (auto& f : out.fs)
       f *= scale;
+    // the mean force's work over the increment less the spring's gain
+    double e = 0.0;
+    for (int k = 0; k < 3; ++k)
+      e += (fs_prev[k] + out.fs[k]) * (fs_trial[k] - out.fs[k]);
+    out.slip_energy = 0.5 * e / p.ks;
   }
   return out;
 }

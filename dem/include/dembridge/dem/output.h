@@ -7,10 +7,12 @@
 /// so what was written stays readable if the run stops.
 
 #include "dembridge/dem/assembly.h"
+#include "dembridge/dem/body.h"
 #include "dembridge/core/checkpoint.h"
 
 #include <filesystem>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -32,8 +34,13 @@ public:
   ParticleWriter(const ParticleWriter&) = delete;
   ParticleWriter& operator=(const ParticleWriter&) = delete;
 
-  /// Appends a frame at time t [s].
-  void write(double t, const Particles& p, const Links& l);
+  /// Adds a rigid body's surface as a grid of its own (`name`, triangles;
+  /// position and velocity per vertex), before the first frame (and again,
+  /// the same, after a resume): each frame then places it where the body is.
+  void add_surface(const std::string& name, SurfaceMesh mesh);
+  /// Appends a frame at time t [s]; `bodies`: one per surface added, in
+  /// the same order.
+  void write(double t, const Particles& p, const Links& l, std::span<const RigidBody> bodies = {});
   std::size_t frames() const { return _times.size(); }
   void close();
   /// The frames written so far (times, crack counts), to a checkpoint.
@@ -48,6 +55,12 @@ private:
   std::vector<std::size_t> _broken_count;
   std::size_t _n;
   std::vector<int> _initial_links; // per particle
+  struct Surface
+  {
+    std::string name;
+    SurfaceMesh mesh;
+  };
+  std::vector<Surface> _surfaces;
 };
 
 } // namespace dembridge::dem

@@ -1,0 +1,609 @@
+#include "impact.h"
+#include "support.h"
+
+#include "dembridge/dem/output.h"
+#include "dembridge/dem/packing.h"
+#include "dembridge/dem/solver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+namespace dembridge::demo
+{
+using namespace dembridge::dem;
+
+namespace
+{
+using V3 = std::array<double, 3>;
+
+double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+double mean(const std::vector<double>& v)
+{
+  double s = 0.0;
+  for (double x : v)
+    s += x;
+  return v.empty() ? 0.0 : s / v.size();
+}
+
+std::string fmt(double v, int precision = 4)
+{
+  std::ostringstream s;
+  s << std::setprecision(precision) << v;
+  return s.str();
+}
+
+/// One crater's layers, walking from the face inwards: layer k holds the
+/// spheres whose initial centre lies k layers in from the face.
+Crater walk_layers(const std::vector<double>& volume, const std::vector<double>& mass, const CraterInput& in)
+{
+  Crater c;
+  for (std::size_t k = 0; k < volume.size(); ++k)
+  {
+    const double area = volume[k] / (in.layer * in.fraction);
+    const double d = std::sqrt(4.0 * area / std::numbers::pi);
+    if (k == 0)
+      c.diameter = d;
+    if (d <= in.tunnel)
+      break;
+    c.depth = std::min(in.thickness, (k + 1) * in.layer);
+    c.mass += mass[k];
+  }
+  return c;
+}
+} // namespace
+
+std::pair<Crater, Crater> measure_craters(const CraterInput& in)
+{
+  const std::size_t layers = static_cast<std::size_t>(std::ceil(in.thickness / in.layer));
+  std::vector<double> vf(layers, 0.0), mf(layers, 0.0), vr(layers, 0.0), mr(layers, 0.0);
+  for (std::size_t i = 0; i < in.r.size(); ++i)
+  {
+    if (!in.detached[i])
+      continue;
+    const double z = in.x0[3 * i + 2];
+    const double v = 4.0 / 3.0 * std::numbers::pi * in.r[i] * in.r[i] * in.r[i];
+    const auto kf = std::min(layers - 1, static_cast<std::size_t>(std::max(0.0, -z / in.layer)));
+    const auto kr = std::min(layers - 1, static_cast<std::size_t>(std::max(0.0, (z + in.thickness) / in.layer)));
+    vf[kf] += v;
+    mf[kf] += in.m[i];
+    vr[kr] += v;
+    mr[kr] += in.m[i];
+  }
+  return {walk_layers(vf, mf, in), walk_layers(vr, mr, in)};
+}
+
+namespace
+{
+
+/// Where the outcome stands.
+enum class Outcome
+{
+  running,
+  perforated, ///< the tail is past the rear face and nothing touches the projectile
+  stopped,    ///< the projectile's speed along its path fell to zero (or reversed)
+  time_up     ///< the duration was reached first
+};
+
+const char* outcome_name(Outcome o)
+{
+  switch (o)
+  {
+  case Outcome::running: return "running";
+  case Outcome::perforated: return "perforated";
+  case Outcome::stopped: return "stopped";
+  case Outcome::time_up: return "time up";
+  }
+  return "";
+}
+
+/// One impact run: set-up (slab, projectile, supports, domain, time step),
+/// the time loop with its history, frames and progress, and the
+/// measurements at the end.
+class ImpactRun
+{
+public:
+  explicit ImpactRun(const ImpactConfig& cfg) : _cfg(cfg), _s(cfg.scenario) {}
+
+  nlohmann::json run()
+  {
+    build_target();
+    build_projectile();
+    set_up_solver();
+    describe();
+    if (_cfg.restart)
+      _ckpt = std::make_unique<Checkpointer>(*_cfg.restart, _cfg.output_dir);
+    if (_ckpt && _ckpt->restarting())
+      resume();
+    else
+      open_output();
+    print_header();
+    loop();
+    report();
+    return _out;
+  }
+
+private:
+  // ---- set-up ---------------------------------------------------------------
+  void build_target()
+  {
+    const TargetSpec& t = _s.target;
+    _lo = {-0.5 * t.size[0], -0.5 * t.size[1], -t.thickness};
+    _hi = {0.5 * t.size[0], 0.5 * t.size[1], 0.0};
+    const Region region = box_region(_lo, _hi);
+    if (!t.packing_file.empty())
+      _pk = read_target_packing(region);
+    else
+    {
+      PackingOptions po;
+      po.mean_radius = t.mean_radius;
+      po.radius_ratio = t.radius_ratio;
+      po.seed = t.seed;
+      if (!_cfg.quiet)
+        std::cout << "packing the slab (" << fmt(region.volume) << " m^3, mean radius " << t.mean_radius << " m)..."
+                  << std::endl;
+      _pk = generate_packing(region, po);
+    }
+    double solid = 0.0;
+    for (double r : _pk.r)
+      solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    _fraction = solid / region.volume;
+    const Material& mat = _s.material.material;
+    _p = make_particles(_pk.x, _pk.r, mat.density, _fraction);
+    const auto bulk = bulk_spheres(region, _p.x, _p.r);
+    _lambda = lambda_for_mean_links(_p.x, _p.r, _s.material.links_per_sphere, bulk);
+    _links = create_links(_p, _lambda, mat);
+    _rmax = *std::max_element(_p.r.begin(), _p.r.end());
+    _rmin = *std::min_element(_p.r.begin(), _p.r.end());
+    _initial_links.assign(_p.size(), 0);
+    for (std::size_t k = 0; k < _links.size(); ++k)
+    {
+      ++_initial_links[_links.a[k]];
+      ++_initial_links[_links.b[k]];
+    }
+  }
+
+  /// A packing file's spheres, those centred in the slab (a sphere outside
+  /// it is an error: the file is not this slab's).
+  Packing read_target_packing(const Region& region) const
+  {
+    Packing pk = read_packing(_s.target.packing_file);
+    std::size_t outside = 0;
+    for (std::size_t i = 0; i < pk.size(); ++i)
+      if (region.sdf({pk.x[3 * i], pk.x[3 * i + 1], pk.x[3 * i + 2]}) > 0.0)
+        ++outside;
+    if (pk.size() == 0 || outside == pk.size())
+      throw std::runtime_error("target.packing_file " + _s.target.packing_file + ": no sphere in the slab ["
+                               + fmt(_lo[0]) + ", " + fmt(_hi[0]) + "] x [" + fmt(_lo[1]) + ", " + fmt(_hi[1])
+                               + "] x [" + fmt(_lo[2]) + ", 0] m");
+    if (outside > 0)
+      throw std::runtime_error("target.packing_file " + _s.target.packing_file + ": " + std::to_string(outside) + " of "
+                               + std::to_string(pk.size()) + " spheres are centred outside the slab (size_m, "
+                               "thickness_m): not this slab's packing");
+    return pk;
+  }
+
+  void build_projectile()
+  {
+    const ProjectileSpec& q = _s.projectile;
+    Shape sh;
+    sh.kind = Shape::Kind::projectile;
+    sh.diameter = q.diameter;
+    sh.length = q.length;
+    sh.nose = q.nose == "flat" ? Nose::flat
+              : q.nose == "hemispherical" ? Nose::hemispherical
+              : q.nose == "conical" ? Nose::conical
+                                   : Nose::ogive;
+    sh.crh = q.crh;
+    sh.cone_angle_deg = q.cone_angle_deg;
+    try
+    {
+      sh.validate();
+    }
+    catch (const std::exception& e)
+    {
+      throw std::runtime_error(std::string("projectile: ") + e.what() + " (projectile.length_m, diameter_m, crh, "
+                               "cone_angle_deg)");
+    }
+    const double th = q.obliquity_deg * std::numbers::pi / 180.0;
+    _dir = {std::sin(th), 0.0, -std::cos(th)};
+    const V3 aim{q.aim[0], q.aim[1], 0.0};
+    const V3 tip{aim[0] - q.standoff * _dir[0], aim[1], aim[2] - q.standoff * _dir[2]};
+    const double density = q.mass > 0.0 ? q.mass / sh.volume() : q.density;
+    RigidBody b = make_projectile("projectile", sh, density, tip, _dir,
+                                  {q.velocity * _dir[0], q.velocity * _dir[1], q.velocity * _dir[2]});
+    b.friction = q.friction;
+    _shape = sh;
+    // no sphere may overlap the projectile at the start
+    for (std::size_t i = 0; i < _p.size(); ++i)
+    {
+      const auto d = signed_distance(sh, b.to_body({_p.x[3 * i], _p.x[3 * i + 1], _p.x[3 * i + 2]}));
+      if (d.d < _p.r[i])
+        throw std::runtime_error("projectile: it overlaps the target at the start (a sphere at (" + fmt(_p.x[3 * i]) + ", "
+                                 + fmt(_p.x[3 * i + 1]) + ", " + fmt(_p.x[3 * i + 2]) + ") m is "
+                                 + fmt(_p.r[i] - d.d) + " m into it): increase projectile.standoff_m or move "
+                                 "projectile.aim_m");
+    }
+    _body = b;
+    _ke0 = b.kinetic_energy();
+  }
+
+  void set_up_solver()
+  {
+    const RunSpec& run = _s.run;
+    const Material& mat = _s.material.material;
+    _dt_crit = critical_time_step(_p, _links, mat);
+    if (run.dt > _dt_crit)
+      throw std::runtime_error("run.dt_s = " + fmt(run.dt) + " s is above the critical time step " + fmt(_dt_crit)
+                               + " s (links and projectile contact): give a smaller one, or 0 for safety_factor x "
+                                 "critical");
+    _dt = run.dt > 0.0 ? run.dt : run.safety * _dt_crit;
+    const ProjectileSpec& q = _s.projectile;
+    // the time to cross the slab at the striking speed sets the output's
+    // pace; the run goes on for up to 4 x that, unless decided earlier
+    _crossing = (q.standoff + _s.target.thickness / std::abs(_dir[2]) + q.length) / q.velocity;
+    _duration = run.duration > 0.0 ? run.duration : 4.0 * _crossing;
+    _nsteps = static_cast<std::int64_t>(std::ceil(_duration / _dt));
+    _crossing_steps = std::max<std::int64_t>(1, static_cast<std::int64_t>(_crossing / _dt));
+    _solver = std::make_unique<DemSolver>(_p, _links, mat, _dt, run.damping, 0.5 * _rmin);
+    set_up_supports();
+    const double margin = run.domain_margin > 0.0 ? run.domain_margin : _s.target.thickness;
+    _solver->set_domain({_lo[0] - margin, _lo[1] - margin, _lo[2] - margin},
+                        {_hi[0] + margin, _hi[1] + margin, _hi[2] + margin});
+    _solver->add_body(_body);
+    _solver->start();
+    _history_every = run.history_every > 0 ? run.history_every : std::max<std::int64_t>(1, _crossing_steps / 1000);
+  }
+
+  void set_up_supports()
+  {
+    const TargetSpec& t = _s.target;
+    if (t.supports == "none")
+      return;
+    const double w = t.support_width > 0.0 ? t.support_width : 2.0 * _rmax;
+    const V3 lo = _lo, hi = _hi;
+    auto near_side = [=](const V3& x)
+    { return x[0] < lo[0] + w || x[0] > hi[0] - w || x[1] < lo[1] + w || x[1] > hi[1] - w; };
+    std::vector<std::int32_t> ids;
+    if (t.supports == "sides")
+      ids = DemSolver::select(_p, near_side, "target.supports = \"sides\": the lateral faces' band (support_width_m)");
+    else
+      ids = DemSolver::select(_p, [&](const V3& x) { return x[2] < lo[2] + w && near_side(x); },
+                              "target.supports = \"rear-edges\": the rear face's edge band (support_width_m)");
+    _supported = ids.size();
+    _solver->add_motion({"supports", std::move(ids), MotionKind::fixed, {true, true, true}, {}});
+  }
+
+  void describe()
+  {
+    _out["scenario"] = _s.name;
+    _out["particles"] = _p.size();
+    _out["links"] = _links.size();
+    _out["lambda"] = _lambda;
+    _out["packing_fraction"] = _fraction;
+    _out["mean_radius_m"] = mean(_p.r);
+    _out["supported_spheres"] = _supported;
+    _out["dt_s"] = _dt;
+    _out["dt_critical_s"] = _dt_crit;
+    _out["duration_s"] = _duration;
+    _out["projectile_mass_kg"] = _body.mass;
+    _out["striking_velocity_m_s"] = _s.projectile.velocity;
+    _out["spheres_across_diameter"] = _s.projectile.diameter / (2.0 * mean(_p.r));
+  }
+
+  // ---- output and restart ---------------------------------------------------
+  std::filesystem::path dir() const { return _cfg.output_dir; }
+
+  void open_writer(const checkpoint::Group* resume)
+  {
+    const auto file = dir() / "particles.xdmf";
+    _writer = resume ? std::make_unique<ParticleWriter>(file, _links, _p.size(), true, *resume)
+                     : std::make_unique<ParticleWriter>(file, _links, _p.size(), true);
+    _writer->add_surface("projectile", body_surface(_shape));
+  }
+
+  void open_output()
+  {
+    if (_cfg.output_dir.empty())
+      return;
+    std::filesystem::create_directories(dir());
+    write_json(dir() / "scenario.json", _s.resolved);
+    if (_s.target.packing_file.empty())
+      write_packing(dir() / "packing.txt", _pk);
+    open_writer(nullptr);
+    write_frame();
+    _csv.open(dir() / "history.csv");
+    _csv << "time_s,tip_x_m,tip_y_m,tip_z_m,depth_m,velocity_x_m_s,velocity_y_m_s,velocity_z_m_s,speed_m_s,"
+            "path_velocity_m_s,contact_force_n,contacts,links_broken,spheres_removed,projectile_kinetic_j,"
+            "target_kinetic_j,elastic_j,dissipated_j,removed_j,imbalance_j\n";
+    write_row();
+  }
+
+  void resume()
+  {
+    const auto file = _ckpt->open_restart();
+    const auto root = file.root();
+    _solver->load(root.group("dem"));
+    const auto run = root.group("run");
+    std::vector<double> tracked;
+    run.read("tracked", tracked);
+    if (tracked.size() != 3)
+      run.fail("tracked", "not the 3 values of the run's tracking (file damaged?)");
+    _max_depth = tracked[0];
+    _touched = tracked[1] != 0.0;
+    _peak_force = tracked[2];
+    _next_frame = run.read_int("next_frame");
+    _out["restarted_from_step"] = _solver->steps();
+    if (_cfg.output_dir.empty())
+      return;
+    const auto g = root.group("particles_xdmf");
+    open_writer(&g);
+    reopen_text(_csv, dir() / "history.csv", run.read_int("csv_bytes"));
+  }
+
+  void save(const checkpoint::Group& root)
+  {
+    _solver->save(root.group("dem"));
+    const auto run = root.group("run");
+    run.write("tracked", std::vector<double>{_max_depth, _touched ? 1.0 : 0.0, _peak_force});
+    run.write_int("next_frame", _next_frame);
+    if (_writer)
+      _writer->save(root.group("particles_xdmf"));
+    if (_csv.is_open())
+      run.write_int("csv_bytes", flushed_size(_csv, dir() / "history.csv"));
+  }
+
+  void write_frame()
+  {
+    const RigidBody& b = _solver->body(0);
+    _writer->write(_solver->time(), _p, _links, std::span<const RigidBody>(&b, 1));
+  }
+
+  // ---- the projectile's state -----------------------------------------------
+  V3 tip() const { return _solver->body(0).to_world({0.0, 0.0, 0.0}); }
+  V3 tail() const { return _solver->body(0).to_world({-_shape.length, 0.0, 0.0}); }
+  double path_velocity() const { return dot(_solver->body(0).v, _dir); }
+  /// The contacts' force on the projectile against its path [N] (> 0 resists).
+  double contact_force() const { return -dot(_solver->body(0).f, _dir); }
+
+  std::size_t broken() const
+  {
+    return _links.count(LinkState::broken_tension) + _links.count(LinkState::broken_shear);
+  }
+
+  void write_row()
+  {
+    if (!_csv.is_open())
+      return;
+    const RigidBody& b = _solver->body(0);
+    const auto e = _solver->energy();
+    const V3 x = tip();
+    _csv << std::setprecision(10) << _solver->time() << ',' << x[0] << ',' << x[1] << ',' << x[2] << ',' << -x[2]
+         << ',' << b.v[0] << ',' << b.v[1] << ',' << b.v[2] << ',' << std::sqrt(dot(b.v, b.v)) << ','
+         << path_velocity() << ',' << contact_force() << ',' << _solver->body_contacts(0).ids.size() << ','
+         << broken() << ',' << _solver->removed().count << ',' << e.body_kinetic << ',' << e.kinetic << ','
+         << e.elastic + e.body_contact << ','
+         << e.softening + e.breakage + e.friction + e.body_friction + e.damping << ',' << e.removed << ','
+         << e.imbalance() << '\n';
+  }
+
+  void print_header() const
+  {
+    if (_cfg.quiet)
+      return;
+    const Material& m = _s.material.material;
+    std::cout << "# concrete: " << _s.material.file << ": E " << m.youngs_modulus << " Pa, T " << m.tensile
+              << " Pa, C0 " << m.cohesion << " Pa, rate effect " << (m.rate_fc > 0 ? fmt(m.rate_fc) + " Pa" : "off")
+              << "\n# " << _p.size() << " spheres (" << fmt(_out["spheres_across_diameter"].get<double>(), 3)
+              << " across the projectile), " << _links.size() << " links (lambda " << fmt(_lambda) << "), "
+              << _supported << " held\n# projectile " << fmt(_body.mass) << " kg at " << _s.projectile.velocity
+              << " m/s (" << fmt(_ke0) << " J); dt " << fmt(_dt) << " s (critical " << fmt(_dt_crit) << "), up to "
+              << _nsteps << " steps (" << fmt(_duration) << " s)\n"
+              << "      time [s]  speed [m/s]  depth [m]  force [N]  broken  removed  imbalance/KE0\n";
+  }
+
+  void progress() const
+  {
+    const auto e = _solver->energy();
+    std::cout << std::setw(14) << fmt(_solver->time()) << std::setw(13) << fmt(path_velocity()) << std::setw(11)
+              << fmt(-tip()[2]) << std::setw(11) << fmt(contact_force(), 3) << std::setw(8) << broken()
+              << std::setw(9) << _solver->removed().count << std::setw(15) << fmt(e.imbalance() / _ke0, 3)
+              << std::endl;
+  }
+
+  // ---- the time loop --------------------------------------------------------
+  Outcome outcome()
+  {
+    const double depth = -tip()[2];
+    _max_depth = std::max(_max_depth, depth);
+    const bool touching = !_solver->body_contacts(0).ids.empty();
+    _touched = _touched || touching;
+    _peak_force = std::max(_peak_force, contact_force());
+    if (_touched && path_velocity() <= 0.0)
+      return Outcome::stopped;
+    if (-tail()[2] > _s.target.thickness + _s.projectile.diameter && !touching)
+      return Outcome::perforated;
+    return Outcome::running;
+  }
+
+  void loop()
+  {
+    const std::int64_t frame_every = std::max<std::int64_t>(1, _crossing_steps / _s.run.frames);
+    Stopwatch clock;
+    double last_print = -1e9;
+    _outcome = outcome();
+    while (_outcome == Outcome::running)
+    {
+      if (_solver->steps() >= _nsteps)
+      {
+        _outcome = Outcome::time_up;
+        break;
+      }
+      _solver->step();
+      const std::int64_t s = _solver->steps();
+      _outcome = outcome();
+      if (s % _history_every == 0)
+        write_row();
+      if (_writer && s >= (_next_frame + 1) * frame_every)
+      {
+        write_frame();
+        ++_next_frame;
+      }
+      if (!_cfg.quiet && clock.seconds() - last_print > 2.0)
+      {
+        progress();
+        last_print = clock.seconds();
+      }
+      if (_outcome != Outcome::running)
+        break;
+      if (_ckpt)
+        _ckpt->end_of_step(s, _solver->time(), [this](const checkpoint::Group& g) { save(g); });
+      else
+        check_stop(_solver->time());
+    }
+    if (_solver->steps() % _history_every != 0)
+      write_row();
+    if (_writer)
+    {
+      write_frame();
+      _writer->close();
+    }
+    if (!_cfg.quiet)
+      progress();
+  }
+
+  // ---- measurements ---------------------------------------------------------
+  void report()
+  {
+    const RigidBody& b = _solver->body(0);
+    const bool perforated = _outcome == Outcome::perforated
+                            || (_outcome == Outcome::time_up && -tail()[2] > _s.target.thickness);
+    _out["outcome"] = outcome_name(_outcome);
+    _out["perforated"] = perforated;
+    _out["residual_velocity_m_s"] = perforated ? std::sqrt(dot(b.v, b.v)) : 0.0;
+    _out["final_path_velocity_m_s"] = path_velocity();
+    _out["penetration_depth_m"] = std::min(_max_depth, _s.target.thickness);
+    _out["tip_depth_max_m"] = _max_depth;
+    _out["peak_contact_force_n"] = _peak_force;
+    measure_damage();
+    report_energy();
+    _out["links_broken"] = broken();
+    _out["links_broken_tension"] = _links.count(LinkState::broken_tension);
+    _out["links_broken_shear"] = _links.count(LinkState::broken_shear);
+    _out["steps"] = _solver->steps();
+    _out["time_s"] = _solver->time();
+    const auto& tm = _solver->timings();
+    _out["step_time_s"] = {{"forces", tm.forces}, {"neighbours", tm.neighbours}, {"integration", tm.integration}};
+    const double link_steps = static_cast<double>(_links.size()) * _solver->steps();
+    const double wall = tm.forces + tm.neighbours + tm.integration;
+    _out["seconds_per_link_step"] = link_steps > 0 ? wall / link_steps : 0.0;
+    _out["seconds_per_particle_step"] = wall / (static_cast<double>(_p.size()) * std::max<std::int64_t>(1, _solver->steps()));
+    _out["neighbour_rebuilds"] = _solver->neighbours().builds();
+  }
+
+  void measure_damage()
+  {
+    const auto& gone = _solver->removed_flags();
+    CraterInput in;
+    in.x0 = _p.x0;
+    in.r = _p.r;
+    in.m = _p.m;
+    in.detached.assign(_p.size(), 0);
+    std::vector<int> lost(_p.size(), 0);
+    for (std::size_t k = 0; k < _links.size(); ++k)
+      if (_links.state[k] != LinkState::intact)
+      {
+        ++lost[_links.a[k]];
+        ++lost[_links.b[k]];
+      }
+    double ejected = _solver->removed().mass;
+    for (std::size_t i = 0; i < _p.size(); ++i)
+    {
+      in.detached[i] = gone[i] || (_initial_links[i] > 0 && lost[i] == _initial_links[i]);
+      if (in.detached[i] && !gone[i])
+      {
+        const double* x = &_p.x[3 * i];
+        const bool outside = x[0] < _lo[0] || x[0] > _hi[0] || x[1] < _lo[1] || x[1] > _hi[1] || x[2] < _lo[2]
+                             || x[2] > _hi[2];
+        if (outside)
+          ejected += _p.m[i];
+      }
+    }
+    in.thickness = _s.target.thickness;
+    in.layer = 2.0 * _rmax;
+    in.fraction = _fraction;
+    in.tunnel = 2.0 * _s.projectile.diameter;
+    const auto [front, rear] = measure_craters(in);
+    _out["front_crater_diameter_m"] = front.diameter;
+    _out["front_crater_depth_m"] = front.depth;
+    _out["front_crater_mass_kg"] = front.mass;
+    _out["rear_scab_diameter_m"] = rear.diameter;
+    _out["rear_scab_depth_m"] = rear.depth;
+    _out["rear_scab_mass_kg"] = rear.mass;
+    _out["ejected_mass_kg"] = ejected;
+    _out["spheres_removed"] = _solver->removed().count;
+    _out["removed_mass_kg"] = _solver->removed().mass;
+  }
+
+  void report_energy()
+  {
+    const auto e = _solver->energy();
+    const double ke = _solver->body(0).kinetic_energy();
+    _out["energy"] = {{"projectile_initial_j", _ke0},
+                      {"projectile_final_j", ke},
+                      {"projectile_lost_j", _ke0 - ke},
+                      {"target_kinetic_j", e.kinetic},
+                      {"elastic_j", e.elastic},
+                      {"contact_elastic_j", e.body_contact},
+                      {"softening_j", e.softening},
+                      {"breakage_j", e.breakage},
+                      {"friction_j", e.friction},
+                      {"projectile_friction_j", e.body_friction},
+                      {"damping_j", e.damping},
+                      {"removed_j", e.removed},
+                      {"support_work_j", e.prescribed_work},
+                      {"imbalance_j", e.imbalance()},
+                      {"imbalance_share", e.imbalance() / _ke0}};
+  }
+
+  const ImpactConfig& _cfg;
+  const Scenario& _s;
+  nlohmann::json _out;
+  V3 _lo{}, _hi{}, _dir{};
+  Packing _pk;
+  Particles _p;
+  Links _links;
+  std::vector<int> _initial_links;
+  double _fraction = 0.0, _lambda = 0.0, _rmax = 0.0, _rmin = 0.0;
+  Shape _shape;
+  RigidBody _body;
+  double _ke0 = 0.0;
+  double _dt = 0.0, _dt_crit = 0.0, _duration = 0.0, _crossing = 0.0;
+  std::int64_t _nsteps = 0, _crossing_steps = 1, _history_every = 1, _next_frame = 0;
+  std::size_t _supported = 0;
+  std::unique_ptr<DemSolver> _solver;
+  std::unique_ptr<Checkpointer> _ckpt;
+  std::unique_ptr<ParticleWriter> _writer;
+  std::ofstream _csv;
+  double _max_depth = -1e300, _peak_force = 0.0;
+  bool _touched = false;
+  Outcome _outcome = Outcome::running;
+};
+
+} // namespace
+
+nlohmann::json run_impact(const ImpactConfig& cfg)
+{
+  Stopwatch clock;
+  auto out = ImpactRun(cfg).run();
+  out["wall_s"] = clock.seconds();
+  return out;
+}
+
+} // namespace dembridge::demo

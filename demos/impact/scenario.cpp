@@ -1,0 +1,418 @@
+#include "scenario.h"
+
+#include "options.h"
+#include "support.h"
+
+#include "dembridge/dem/material_file.h"
+
+#include <cmath>
+#include <iomanip>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <toml++/toml.h>
+
+namespace dembridge::demo
+{
+namespace
+{
+
+/// "3.5", "7", "text": a TOML value as the user would write it.
+std::string show(const toml::node& n)
+{
+  std::ostringstream s;
+  if (auto str = n.as_string())
+    s << '"' << str->get() << '"';
+  else if (n.is_floating_point())
+    s << std::setprecision(12) << n.value<double>().value();
+  else if (auto arr = n.as_array())
+    s << *arr;
+  else if (n.is_table())
+    s << "a table";
+  else
+    n.visit([&](const auto& v) { s << v; });
+  return s.str();
+}
+
+std::string type_name(const toml::node& n)
+{
+  switch (n.type())
+  {
+  case toml::node_type::string: return "a string";
+  case toml::node_type::integer: return "an integer";
+  case toml::node_type::floating_point: return "a number";
+  case toml::node_type::boolean: return "a boolean";
+  case toml::node_type::array: return "an array";
+  case toml::node_type::table: return "a table";
+  default: return "a date or time";
+  }
+}
+
+std::string number_text(double v)
+{
+  std::ostringstream s;
+  s.precision(12);
+  s << v;
+  return s.str();
+}
+
+/// Reads the keys of one scenario, section by section, each with its
+/// default, allowed values and meaning; records what was read (for the
+/// unknown-key check) and the value used (Scenario::resolved).
+class Reader
+{
+public:
+  Reader(const toml::table& root, std::string file) : _root(root), _file(std::move(file)) {}
+
+  void section(const std::string& name, const std::string& meaning)
+  {
+    _section = name;
+    _known[name];
+    _doc << "\n[" << name << "]  " << meaning << "\n";
+    const toml::node* n = _root.get(name);
+    if (n && !n->is_table())
+      fail(name, "must be a table ([" + name + "]), not " + type_name(*n));
+    _table = n ? n->as_table() : nullptr;
+  }
+
+  double number(const std::string& key, double def, const Allowed& allowed, const std::string& meaning)
+  {
+    const toml::node* n = get(key, meaning, number_text(def), allowed.text());
+    double v = def;
+    if (n)
+    {
+      if (!n->is_number())
+        fail(key, "must be a number, not " + type_name(*n) + " (" + show(*n) + ")");
+      v = n->value<double>().value();
+      if (!std::isfinite(v) || !allowed.contains(v))
+        fail(key, "= " + show(*n) + ": allowed " + allowed.text());
+    }
+    record(key, v);
+    return v;
+  }
+
+  long integer(const std::string& key, long def, const Allowed& allowed, const std::string& meaning)
+  {
+    const toml::node* n = get(key, meaning, std::to_string(def), allowed.text());
+    long v = def;
+    if (n)
+    {
+      if (!n->is_integer())
+        fail(key, "must be an integer, not " + type_name(*n) + " (" + show(*n) + ")");
+      v = static_cast<long>(n->value<std::int64_t>().value());
+      if (!allowed.contains(static_cast<double>(v)))
+        fail(key, "= " + show(*n) + ": allowed " + allowed.text());
+    }
+    record(key, v);
+    return v;
+  }
+
+  std::string text(const std::string& key, const std::string& def, const std::string& choices,
+                   const std::string& meaning)
+  {
+    const toml::node* n = get(key, meaning, def.empty() ? "\"\"" : "\"" + def + "\"", choices);
+    std::string v = def;
+    if (n)
+    {
+      if (!n->is_string())
+        fail(key, "must be a string, not " + type_name(*n) + " (" + show(*n) + ")");
+      v = n->value<std::string>().value();
+      if (!choices.empty() && choices.find('|') != std::string::npos)
+      {
+        bool ok = false;
+        std::istringstream in(choices);
+        for (std::string c; in >> c;)
+          ok = ok || (c != "|" && c == v);
+        if (!ok)
+          fail(key, "= \"" + v + "\": allowed " + choices);
+      }
+    }
+    record(key, v);
+    return v;
+  }
+
+  template <std::size_t N>
+  std::array<double, N> numbers(const std::string& key, const std::array<double, N>& def, const Allowed& allowed,
+                                const std::string& meaning)
+  {
+    std::ostringstream d;
+    d << "[";
+    for (std::size_t k = 0; k < N; ++k)
+      d << (k ? ", " : "") << number_text(def[k]);
+    d << "]";
+    const toml::node* n = get(key, meaning, d.str(), std::to_string(N) + " numbers, each " + allowed.text());
+    std::array<double, N> v = def;
+    if (n)
+    {
+      const toml::array* a = n->as_array();
+      if (!a || a->size() != N)
+        fail(key, "must be an array of " + std::to_string(N) + " numbers, not " + show(*n));
+      for (std::size_t k = 0; k < N; ++k)
+      {
+        const toml::node& e = *a->get(k);
+        if (!e.is_number())
+          fail(key, "must be an array of " + std::to_string(N) + " numbers, not " + show(*n));
+        v[k] = e.value<double>().value();
+        if (!std::isfinite(v[k]) || !allowed.contains(v[k]))
+          fail(key, "= " + show(*n) + ": each allowed " + allowed.text());
+      }
+    }
+    record(key, nlohmann::json(v));
+    return v;
+  }
+
+  /// @throws std::runtime_error naming the file and the section's key.
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const
+  {
+    throw std::runtime_error("scenario " + _file + ": " + (key == _section ? key : _section + "." + key) + " " + what);
+  }
+
+  /// Every key of the file must have been read.
+  void check_unknown() const
+  {
+    for (const auto& [name, node] : _root)
+    {
+      const std::string s(name.str());
+      const auto known = _known.find(s);
+      if (known == _known.end())
+      {
+        std::string list;
+        for (const auto& [k, keys] : _known)
+          list += (list.empty() ? "" : ", ") + k;
+        throw std::runtime_error("scenario " + _file + ": unknown section or key '" + s + "' (sections: " + list + ")");
+      }
+      if (!node.is_table())
+        continue;
+      for (const auto& [key, value] : *node.as_table())
+      {
+        const std::string k(key.str());
+        if (!known->second.count(k))
+        {
+          std::string list;
+          for (const auto& q : known->second)
+            list += (list.empty() ? "" : ", ") + q;
+          throw std::runtime_error("scenario " + _file + ": unknown key '" + s + "." + k + "' ([" + s
+                                   + "] takes: " + list + ")");
+        }
+      }
+    }
+  }
+
+  const nlohmann::json& resolved() const { return _resolved; }
+  std::string doc() const { return _doc.str(); }
+  bool given(const std::string& key) const { return _table && _table->get(key); }
+
+private:
+  const toml::node* get(const std::string& key, const std::string& meaning, const std::string& def,
+                        const std::string& allowed)
+  {
+    _known[_section].insert(key);
+    _doc << "  " << key << " = " << def << "\n      " << meaning << (allowed.empty() ? "" : "; allowed: " + allowed)
+         << "\n";
+    return _table ? _table->get(key) : nullptr;
+  }
+  void record(const std::string& key, const nlohmann::json& v) { _resolved[_section + "." + key] = v; }
+
+  const toml::table& _root;
+  std::string _file;
+  std::string _section;
+  const toml::table* _table = nullptr;
+  std::map<std::string, std::set<std::string>> _known;
+  nlohmann::json _resolved = nlohmann::json::object();
+  std::ostringstream _doc;
+};
+
+/// Applies one --set key=value to the parsed file.
+void apply_set(toml::table& root, const std::string& set)
+{
+  const auto eq = set.find('=');
+  const std::string key = set.substr(0, eq);
+  const auto dot = key.find('.');
+  if (eq == std::string::npos || dot == std::string::npos || dot == 0 || dot + 1 == key.size())
+    throw std::runtime_error("--set '" + set + "': expected section.key=value (e.g. projectile.velocity_m_s=600)");
+  const std::string section = key.substr(0, dot), name = key.substr(dot + 1), text = set.substr(eq + 1);
+  toml::table value;
+  try
+  {
+    value = toml::parse("v = " + text);
+  }
+  catch (const toml::parse_error&)
+  {
+    value.insert_or_assign("v", text); // a bare word: a string
+  }
+  toml::node* s = root.get(section);
+  if (!s)
+  {
+    root.insert_or_assign(section, toml::table{});
+    s = root.get(section);
+  }
+  if (!s->is_table())
+    throw std::runtime_error("--set '" + set + "': " + section + " is not a section");
+  s->as_table()->insert_or_assign(name, *value.get("v"));
+}
+
+std::filesystem::path beside(const std::filesystem::path& scenario, const std::string& name)
+{
+  const std::filesystem::path p(name);
+  return p.is_relative() && scenario.has_parent_path() ? scenario.parent_path() / p : p;
+}
+
+std::string default_material()
+{
+  return shipped_file("materials/default.json", DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json");
+}
+
+/// The [material] section: the file, then its values overridden.
+MaterialSpec read_material_section(Reader& r, const std::filesystem::path& scenario)
+{
+  r.section("material", "the concrete: a material file of calibrate, any of its values overridden");
+  MaterialSpec m;
+  const std::string file = r.text("file", "", "",
+                                  "DE parameter file (JSON, from calibrate), relative to the scenario's folder; "
+                                  "\"\" = the shipped default concrete");
+  m.file = file.empty() ? default_material() : beside(scenario, file).string();
+  dem::MaterialFile f;
+  try
+  {
+    f = dem::read_material(m.file);
+  }
+  catch (const std::exception& e)
+  {
+    r.fail("file", "= \"" + file + "\": " + e.what());
+  }
+  dem::Material& c = f.material;
+  const Allowed angle{0.0, 90.0, false, true, {}, {}};
+  c.youngs_modulus = r.number("youngs_modulus_pa", c.youngs_modulus, Allowed::positive(1e13), "E of equation [1] [Pa] (default: the file's)");
+  c.poisson_ratio = r.number("poisson_ratio", c.poisson_ratio, Allowed::open(-1.0, 0.5), "nu of equation [1] [-]");
+  c.density = r.number("density_kg_m3", c.density, Allowed::positive(1e5), "bulk density [kg/m^3]");
+  c.micro.alpha = r.number("alpha", c.micro.alpha, Allowed::closed(-1e3, 1e3), "alpha of equation [1] [-]");
+  c.micro.beta = r.number("beta", c.micro.beta, Allowed::closed(-1e3, 1e3), "beta of equation [1] [-]");
+  c.micro.gamma = r.number("gamma", c.micro.gamma, Allowed::closed(-1e3, 1e3), "gamma of equation [1] [-]");
+  c.tensile = r.number("tensile_strength_pa", c.tensile, Allowed::non_negative(1e12), "local tensile strength T [Pa]");
+  c.cohesion = r.number("cohesion_pa", c.cohesion, Allowed::non_negative(1e12), "cohesion C0 [Pa]");
+  c.zeta = r.number("softening", c.zeta, Allowed::non_negative(1e6), "softening factor zeta [-]");
+  c.phi_i_deg = r.number("phi_i_deg", c.phi_i_deg, angle, "internal friction angle [degree]");
+  c.phi_c_deg = r.number("phi_c_deg", c.phi_c_deg, angle, "contact friction angle [degree]");
+  c.rate_fc = r.number("rate_fc_pa", c.rate_fc, Allowed::positive(1e10).or_value(0.0, "no rate effect"),
+                       "strain-rate effect: the Malvar-Ross law's compressive strength f_c [Pa]");
+  m.links_per_sphere = r.number("links_per_sphere", f.links_per_sphere, Allowed::positive(100.0),
+                                "mean links per sphere in the bulk (sets lambda) [-]");
+  c.validate();
+  m.material = c;
+  return m;
+}
+
+TargetSpec read_target(Reader& r)
+{
+  r.section("target", "the slab: x, y in [-size/2, size/2], z in [-thickness, 0], struck at z = 0");
+  TargetSpec t;
+  t.size = r.numbers<2>("size_m", t.size, Allowed::positive(100.0), "lateral sizes along x and y [m]");
+  t.thickness = r.number("thickness_m", t.thickness, Allowed::positive(100.0), "thickness along z [m]");
+  t.mean_radius = r.number("mean_radius_m", t.mean_radius, Allowed::positive(1.0), "mean sphere radius [m]");
+  t.radius_ratio = r.number("radius_ratio", t.radius_ratio, Allowed::closed(1.0, 3.0), "Rmax / Rmin [-]");
+  t.seed = static_cast<unsigned>(r.integer("seed", t.seed, Allowed::closed(0, 4294967295.0), "packing random seed"));
+  t.packing_file = r.text("packing_file", "", "",
+                          "read the packing ('x y z r' [m], e.g. a run's packing.txt) instead of generating it; "
+                          "\"\" = generate");
+  t.supports = r.text("supports", t.supports, "sides | rear-edges | none",
+                      "sides: the spheres of the four lateral faces held; rear-edges: those of the rear face "
+                      "within support_width_m of its edges; none: free");
+  t.support_width = r.number("support_width_m", t.support_width, Allowed::positive(10.0).or_value(0.0, "2 Rmax"),
+                             "width of the band held [m]");
+  return t;
+}
+
+ProjectileSpec read_projectile(Reader& r)
+{
+  r.section("projectile", "the rigid projectile: a cylinder shank and its nose, axis along its path");
+  ProjectileSpec p;
+  p.mass = r.number("mass_kg", p.mass, Allowed::positive(1e6).or_value(0.0, "from density_kg_m3 and the shape"),
+                    "mass [kg]");
+  p.density = r.number("density_kg_m3", p.density, Allowed::positive(1e5), "solid density, when mass_kg = 0 [kg/m^3]");
+  p.diameter = r.number("diameter_m", p.diameter, Allowed::positive(10.0), "shank diameter [m]");
+  p.length = r.number("length_m", p.length, Allowed::positive(100.0), "overall length, tip to tail [m]");
+  p.nose = r.text("nose", p.nose, "flat | hemispherical | conical | ogive", "nose shape");
+  p.crh = r.number("crh", p.crh, Allowed{0.5, 1e3, false, true, {}, {}},
+                   "ogive: caliber-radius-head psi (arc radius psi x diameter) [-]");
+  p.cone_angle_deg = r.number("cone_angle_deg", p.cone_angle_deg, Allowed::open(0.0, 90.0), "conical: tip half-angle [degree]");
+  p.velocity = r.number("velocity_m_s", p.velocity, Allowed::positive(1e4), "striking speed [m/s]");
+  p.obliquity_deg = r.number("obliquity_deg", p.obliquity_deg, Allowed{0.0, 90.0, false, true, {}, {}},
+                             "angle of the path to the face's normal, tilted towards +x [degree]");
+  p.aim = r.numbers<2>("aim_m", p.aim, Allowed::closed(-100.0, 100.0), "where the path meets the struck face (x, y) [m]");
+  p.standoff = r.number("standoff_m", p.standoff, Allowed::positive(10.0), "tip to the face at the start, along the path [m]");
+  p.friction = r.number("friction", p.friction, Allowed::closed(0.0, 10.0), "Coulomb coefficient with the concrete [-]");
+  return p;
+}
+
+RunSpec read_run(Reader& r)
+{
+  r.section("run", "the time loop and the outputs");
+  RunSpec s;
+  s.duration = r.number("duration_s", s.duration, Allowed::positive(10.0).or_value(0.0, "automatic"),
+                        "physical time simulated at most: the run ends when the projectile stops or has cleared "
+                        "the slab; automatic: 4 x the crossing time (standoff + thickness + length) / velocity [s]");
+  s.dt = r.number("dt_s", s.dt, Allowed::positive(1.0).or_value(0.0, "safety_factor x critical"), "time step [s]");
+  s.safety = r.number("safety_factor", s.safety, Allowed::above(0.0, 1.0),
+                      "fraction of the critical time step (links and projectile contact) [-]");
+  s.damping = r.number("damping_1_s", s.damping, Allowed::non_negative(1e9), "velocity-proportional damping [1/s]");
+  s.frames = static_cast<int>(r.integer("frames", s.frames, Allowed::closed(1, 100000), "XDMF frames over the crossing time (the same pace after it)"));
+  s.history_every = static_cast<int>(r.integer("history_every", s.history_every,
+                                               Allowed::closed(1, 1e9).or_value(0, "1000 rows over the crossing time"),
+                                               "steps between rows of history.csv"));
+  s.domain_margin = r.number("domain_margin_m", s.domain_margin, Allowed::positive(100.0).or_value(0.0, "the thickness"),
+                             "spheres farther than this from the slab are removed (fragments) [m]");
+  return s;
+}
+
+Scenario read_sections(Reader& r, const std::filesystem::path& file)
+{
+  Scenario s;
+  s.file = file;
+  r.section("scenario", "what the case is");
+  s.name = r.text("name", "impact", "", "the case's name (in the summary and plots)");
+  s.material = read_material_section(r, file);
+  s.target = read_target(r);
+  s.projectile = read_projectile(r);
+  s.run = read_run(r);
+  s.resolved = r.resolved();
+  s.resolved["material.file"] = s.material.file;
+  return s;
+}
+
+} // namespace
+
+Scenario read_scenario(const std::filesystem::path& file, const std::vector<std::string>& sets)
+{
+  toml::table root;
+  if (!std::filesystem::is_regular_file(file))
+    throw std::runtime_error("scenario " + file.string() + ": no such file (give a scenario file, or the name of "
+                             "a shipped one: small, hanchak-48, semi-infinite)");
+  try
+  {
+    root = toml::parse_file(file.string());
+  }
+  catch (const toml::parse_error& e)
+  {
+    std::ostringstream s;
+    s << "scenario " << file.string() << ": line " << e.source().begin.line << ", column " << e.source().begin.column
+      << ": " << e.description();
+    throw std::runtime_error(s.str());
+  }
+  for (const auto& set : sets)
+    apply_set(root, set);
+  Reader r(root, file.string());
+  Scenario s = read_sections(r, file);
+  r.check_unknown();
+  return s;
+}
+
+std::string scenario_keys()
+{
+  const toml::table empty;
+  Reader r(empty, "");
+  read_sections(r, ""); // an empty file: every key at its default
+  return r.doc();
+}
+
+} // namespace dembridge::demo

@@ -1,0 +1,94 @@
+#pragma once
+/// @file scenario.h
+/// The impact scenario file (TOML): a target slab of DE concrete, a rigid
+/// projectile, the supports and the run's settings, each a section of the
+/// file; keys carry their SI unit in their name (docs/impact.md gives the
+/// schema). Every key is checked when the file is read: an unknown key, a
+/// value of the wrong type or out of its range is an error naming the file,
+/// the key and what is allowed. `--set key=value` overrides a key (dotted:
+/// `projectile.velocity_m_s=600`) as if the file said so.
+
+#include "dembridge/dem/assembly.h"
+
+#include <array>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace dembridge::demo
+{
+
+/// The concrete: a calibrated material file, then any of its keys overridden.
+struct MaterialSpec
+{
+  std::string file;              ///< resolved path of the material file
+  dem::Material material;        ///< its values, with the overrides
+  double links_per_sphere = 12.0;
+};
+
+/// A rectangular slab: x, y in [-size/2, size/2], z in [-thickness, 0] (the
+/// struck face at z = 0, its outward normal +z).
+struct TargetSpec
+{
+  std::array<double, 2> size{0.1, 0.1}; ///< lateral sizes [m]
+  double thickness = 0.03;              ///< [m]
+  double mean_radius = 2.5e-3;          ///< [m]
+  double radius_ratio = 2.0;            ///< Rmax / Rmin [-]
+  unsigned seed = 1;
+  std::string packing_file;             ///< "" = generate
+  std::string supports = "sides";       ///< sides (lateral faces held) | rear-edges | none
+  double support_width = 0.0;           ///< band held [m]; 0 = 2 Rmax
+};
+
+struct ProjectileSpec
+{
+  double mass = 0.0;           ///< [kg]; 0 = from density and shape
+  double density = 7850.0;     ///< [kg/m^3] (used when mass = 0)
+  double diameter = 0.0254;    ///< [m]
+  double length = 0.1;         ///< tip to tail [m]
+  std::string nose = "ogive";  ///< flat | hemispherical | conical | ogive
+  double crh = 3.0;            ///< ogive caliber-radius-head [-]
+  double cone_angle_deg = 30.0;
+  double velocity = 300.0;     ///< striking speed [m/s]
+  double obliquity_deg = 0.0;  ///< angle between the path and the face's normal, in the x-z plane
+  std::array<double, 2> aim{0.0, 0.0}; ///< where the path meets the face (x, y) [m]
+  double standoff = 1e-3;      ///< tip to face at the start, along the path [m]
+  double friction = 0.1;       ///< Coulomb coefficient projectile-concrete [-]
+};
+
+struct RunSpec
+{
+  double duration = 0.0;       ///< at most [s]; 0 = 4 x the crossing time (slab and its own length)
+  double dt = 0.0;             ///< [s]; 0 = safety x critical
+  double safety = 0.5;         ///< fraction of the critical step [-]
+  double damping = 0.0;        ///< velocity-proportional damping [1/s]
+  int frames = 40;             ///< XDMF frames over the crossing time
+  int history_every = 0;       ///< steps between history rows; 0 = 1000 over the crossing time
+  double domain_margin = 0.0;  ///< the domain: the slab grown by this [m]; 0 = its thickness
+};
+
+struct Scenario
+{
+  std::filesystem::path file;
+  std::string name;
+  MaterialSpec material;
+  TargetSpec target;
+  ProjectileSpec projectile;
+  RunSpec run;
+  /// Every key with the value used (defaults included), "section.key" ->
+  /// value: echoed at the start, written to the summary, compared on restart.
+  nlohmann::json resolved;
+};
+
+/// Reads and checks a scenario file, with the --set overrides ("key=value",
+/// value in TOML syntax; a bare word is a string). Relative file names in
+/// it are relative to the scenario's folder.
+/// @throws std::runtime_error naming the file, the key and what is allowed.
+Scenario read_scenario(const std::filesystem::path& file, const std::vector<std::string>& sets = {});
+
+/// The scenario keys with their meaning, unit and default, one per line
+/// (`impact --keys`; docs/impact.md lists the same).
+std::string scenario_keys();
+
+} // namespace dembridge::demo
