@@ -435,10 +435,12 @@ void DemSolver::end_step()
   _nl.update(_p.x, _p.r, _l, _removed);
   const double t2 = omp_get_wtime();
   compute_forces(_p, _l, _nl, _mat, dt, _counters, *_scratch);
+  const double t25 = omp_get_wtime();
   contact_bodies(dt);
   const double t3 = omp_get_wtime();
   _time.neighbours += t2 - t1;
-  _time.forces += t3 - t2;
+  _time.forces += t25 - t2;
+  _time.bodies += t3 - t25;
   const double w_presc = held_reactions();
   kick(0.5 * dt);
   kick_bodies(0.5 * dt);

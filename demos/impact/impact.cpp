@@ -499,9 +499,10 @@ private:
     _out["steps"] = _solver->steps();
     _out["time_s"] = _solver->time();
     const auto& tm = _solver->timings();
-    _out["step_time_s"] = {{"forces", tm.forces}, {"neighbours", tm.neighbours}, {"integration", tm.integration}};
+    _out["step_time_s"] = {{"links_and_contacts", tm.forces}, {"projectile_contacts", tm.bodies},
+                           {"neighbours", tm.neighbours}, {"integration", tm.integration}};
     const double link_steps = static_cast<double>(_links.size()) * _solver->steps();
-    const double wall = tm.forces + tm.neighbours + tm.integration;
+    const double wall = tm.forces + tm.bodies + tm.neighbours + tm.integration;
     _out["seconds_per_link_step"] = link_steps > 0 ? wall / link_steps : 0.0;
     _out["seconds_per_particle_step"] = wall / (static_cast<double>(_p.size()) * std::max<std::int64_t>(1, _solver->steps()));
     _out["neighbour_rebuilds"] = _solver->neighbours().builds();

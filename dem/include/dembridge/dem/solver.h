@@ -58,7 +58,8 @@ struct Removed
 /// Wall time spent in each part of the steps so far [s].
 struct DemTimings
 {
-  double forces = 0.0;      ///< compute_forces
+  double forces = 0.0;      ///< compute_forces: links and sphere contacts (one sweep)
+  double bodies = 0.0;      ///< the rigid bodies' contacts
   double neighbours = 0.0;  ///< neighbour-list checks and rebuilds
   double integration = 0.0; ///< kicks, drift, conditions, reactions, checks
 };
