@@ -1,5 +1,5 @@
 #!/bin/sh
-# Renders docs/coupled-bar.png, the picture on README.md, from the bar demo's
+# Renders docs/coupled-bar.png, the bar's picture in docs/validation.md, from the bar demo's
 # own output: the coupled bar (shells and spheres) in static bending, seen
 # from the side. Builds the bar demo first if it is missing.
 #   sh scripts/picture.sh                      # default sizes, into docs/
