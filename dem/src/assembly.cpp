@@ -41,6 +41,16 @@ void Material::validate() const
     impl::out_of_range("contact friction angle phi_c", phi_c_deg, "in [0, 90) degrees");
   if (!(rate_fc >= 0.0) || !std::isfinite(rate_fc))
     impl::out_of_range("strain-rate law's compressive strength f_c", rate_fc, ">= 0 Pa (0 = no rate effect)");
+  const CompactionLaw& c = compaction;
+  if (!(c.onset >= 0.0 && c.onset < 1.0))
+    impl::out_of_range("compaction onset strain", c.onset, "in [0, 1) (0 = no compaction)");
+  if (c.on())
+  {
+    if (!(c.stiffness > 0.0 && c.stiffness <= 1.0))
+      impl::out_of_range("compaction stiffness ratio", c.stiffness, "in (0, 1]");
+    if (!(c.lock > c.onset && c.lock < 1.0))
+      impl::out_of_range("compaction lock strain", c.lock, "above the onset strain and below 1");
+  }
   // eq. [1] must give positive stiffnesses
   (void)link_stiffness(youngs_modulus, poisson_ratio, 1.0, 1.0, micro);
 }

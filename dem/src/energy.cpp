@@ -32,7 +32,9 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
       law.tensile *= l.strength[k];
       law.cohesion *= l.strength[k];
     }
-    const double delta = std::sqrt(dot3(d, d)) - l.d0[k];
+    double delta = std::sqrt(dot3(d, d)) - l.d0[k];
+    if (!l.compaction.empty())
+      delta -= compaction_set(l.compaction[k], l.d0[k], mat.compaction); // from the set
     const double fn = link_normal_force(delta, l.delta_max[k], law).fn;
     const double wk = l.weight.empty() ? 1.0 : l.weight[k];
     e += wk * (0.5 * fn * delta + 0.5 * dot3(&l.fs[3 * k], &l.fs[3 * k]) / law.ks);
@@ -47,7 +49,12 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
     for (int k = 0; k < 3; ++k)
       d[k] = p.x[3 * j + k] - p.x[3 * i + k];
     const double rs = p.r[i] + p.r[j];
-    const double gap = rs - std::sqrt(dot3(d, d));
+    // a broken compacted link's spheres touch from its rest distance (force_loop.cpp)
+    const std::int32_t k = nl.link[q];
+    const double touch = !l.compaction.empty() && k >= 0
+                             ? std::min(rs, l.d0[k] + compaction_set(l.compaction[k], l.d0[k], mat.compaction))
+                             : rs;
+    const double gap = touch - std::sqrt(dot3(d, d));
     const double kn = mat.youngs_modulus * interaction_surface(p.r[i], p.r[j]) / rs * cf.cn;
     const double wq = p.weight.empty() ? 1.0 : 0.5 * (p.weight[i] + p.weight[j]);
     if (gap > 0.0)
@@ -71,6 +78,18 @@ double softening_energy(const Particles& p, const Links& l, const Material& mat)
     law.tensile = mat.tensile * (l.strength.size() == l.size() && !l.strength.empty() ? l.strength[k] : 1.0);
     e += (l.weight.empty() ? 1.0 : l.weight[k]) * softening_dissipation(l.delta_max[k], law);
   }
+  return e;
+}
+
+double compaction_energy(const Links& l, const Material& mat)
+{
+  double e = 0.0;
+  if (l.compaction.empty())
+    return e;
+  for (std::size_t k = 0; k < l.size(); ++k)
+    if (l.compaction[k] > mat.compaction.onset)
+      e += (l.weight.empty() ? 1.0 : l.weight[k])
+           * compaction_dissipation(l.compaction[k], l.kn[k], l.d0[k], mat.compaction);
   return e;
 }
 

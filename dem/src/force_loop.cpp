@@ -216,6 +216,9 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   // the strain rate only over a step (dt > 0: the velocities are v(n+1/2))
   const bool factored = l.strength.size() == l.size() && !l.strength.empty();
   const bool rated = factored && mat.rate_fc > 0.0 && dt > 0.0;
+  const bool compacting = mat.compaction.on() && l.compaction.size() == l.size();
+  auto compacted_touch = [&](std::int32_t k, double rs)
+  { return std::min(rs, l.d0[k] + compaction_set(l.compaction[k], l.d0[k], mat.compaction)); };
   const double* rad = p.r.data();
   bool short_team = false;
   std::size_t spinning = np; // a sphere turning by more than 1 rad in the step
@@ -260,7 +263,17 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     // the radii from the records (= link_surface): p.r[b] would be one more
     // cache line per link (measured: 5 % slower at 200k spheres)
     law.s_int = pair_surface(rec[record * i + 3], rec[record * l.b[k] + 3]);
-    const double delta = D - l.d0[k];
+    double delta = D - l.d0[k];
+    if (compacting)
+    {
+      // compaction (law.h): the largest compressive strain so far, and the
+      // set it left, from which the rest of the law counts
+      const double e = -delta / l.d0[k];
+      double& e_max = l.compaction[k];
+      if (e > e_max)
+        e_max = e;
+      delta -= compaction_set(e_max, l.d0[k], mat.compaction);
+    }
     if (factored)
     {
       // the rate effect: while the link is elastic, its strength factor
@@ -416,8 +429,12 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     const std::int32_t j = nl.b[q];
     const double D = n[3];
     const double rs = rad[i] + rad[j];
+    // a compacted link that broke left its spheres closer than before: they
+    // touch from its rest distance D_init + set on (no force from the
+    // overlap the compaction made)
+    const double touch = compacting && nl.link[q] >= 0 ? compacted_touch(nl.link[q], rs) : rs;
     double* fs_old = &nl.fs[3 * q];
-    if (D >= rs) // (a listed pair never has an intact link: NeighbourList)
+    if (D >= touch) // (a listed pair never has an intact link: NeighbourList)
     {
       if (nl.touching[q])
       {
@@ -436,7 +453,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     law.s_int = pair_surface(rad[i], rad[j]);
     law.kn = mat.youngs_modulus * law.s_int / rs * cf.cn;
     law.ks = law.kn * cf.cs;
-    const double fn = contact_normal_force(D, rs, law.kn);
+    const double fn = contact_normal_force(D, touch, law.kn);
     const double* n_old = nl.touching[q] ? &nl.n[3 * q] : n;
     const Vec3 fs_prev = nl.touching[q] ? Vec3{fs_old[0], fs_old[1], fs_old[2]} : Vec3{0, 0, 0};
     const Vec3 trial = trial_shear(fs_prev, {n_old[0], n_old[1], n_old[2]}, {n[0], n[1], n[2]},

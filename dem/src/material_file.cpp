@@ -45,6 +45,9 @@ MaterialFile read_material(const std::filesystem::path& file)
   // optional: the strain-rate effect (absent: none)
   if (j.contains("rate_fc_pa"))
     t.rate_fc = get("rate_fc_pa");
+  // optional: compaction (absent: none)
+  if (j.contains("compaction_onset"))
+    t.compaction = {get("compaction_onset"), get("compaction_stiffness"), get("compaction_lock")};
   m.lambda = j.value("lambda", 0.0);
   m.macroscopic = j.value("macroscopic", nlohmann::json::object());
   m.calibration = j.value("calibration", nlohmann::json::object());
@@ -78,6 +81,12 @@ void write_material(const std::filesystem::path& file, const MaterialFile& m)
   j["links_per_sphere"] = m.links_per_sphere;
   if (t.rate_fc > 0.0)
     j["rate_fc_pa"] = t.rate_fc;
+  if (t.compaction.on())
+  {
+    j["compaction_onset"] = t.compaction.onset;
+    j["compaction_stiffness"] = t.compaction.stiffness;
+    j["compaction_lock"] = t.compaction.lock;
+  }
   j["lambda"] = m.lambda;
   j["macroscopic"] = m.macroscopic;
   j["calibration"] = m.calibration;

@@ -35,6 +35,10 @@ DemSolver::DemSolver(Particles& p, Links& l, const Material& mat, double dt, dou
     l.strength.assign(l.size(), 1.0);
   else if (!(mat.rate_fc > 0.0))
     l.strength.clear();
+  if (mat.compaction.on() && l.compaction.size() != l.size())
+    l.compaction.assign(l.size(), 0.0);
+  else if (!mat.compaction.on())
+    l.compaction.clear();
 }
 
 void DemSolver::set_domain(const std::array<double, 3>& lo, const std::array<double, 3>& hi)
@@ -520,6 +524,7 @@ DemEnergy DemSolver::energy() const
                  + 0.5 * _p.inertia[i] * dot3(&_p.w[3 * i], &_p.w[3 * i]);
   e.elastic = elastic_energy(_p, _l, _nl, _mat);
   e.softening = softening_energy(_p, _l, _mat);
+  e.compaction = compaction_energy(_l, _mat);
   e.breakage = _counters.breakage;
   e.friction = _counters.friction;
   e.body_kinetic = e.body_contact = e.body_friction = 0.0;

@@ -76,6 +76,7 @@ void save_links(const Group& g, const Links& l)
   g.write("state", state);
   g.write("weight", l.weight);
   g.write("strength", l.strength);
+  g.write("compaction", l.compaction);
 }
 
 void load_links(const Group& g, Links& l)
@@ -84,7 +85,8 @@ void load_links(const Group& g, Links& l)
   check_same(g, "b", l.b);
   check_same(g, "d0", l.d0);
   for (auto [name, v] : {std::pair{"kn", &l.kn}, {"ks", &l.ks}, {"fs", &l.fs}, {"n", &l.n},
-                         {"delta_max", &l.delta_max}, {"weight", &l.weight}, {"strength", &l.strength}})
+                         {"delta_max", &l.delta_max}, {"weight", &l.weight}, {"strength", &l.strength},
+                         {"compaction", &l.compaction}})
     read_same_size(g, name, *v);
   std::vector<std::uint8_t> state;
   g.read("state", state);
@@ -274,7 +276,13 @@ void DemSolver::load(const Group& g)
   g.read("counters", c);
   if (e.size() != 13 || c.size() != 4)
     g.fail("energy", "unexpected length (file damaged?)");
-  _e = {e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8], e[9], e[10], e[11], e[12]};
+  // by name, in save()'s order (compaction is a state: recomputed by energy())
+  _e = DemEnergy{};
+  double* const fields[] = {&_e.initial,  &_e.kinetic, &_e.elastic, &_e.softening, &_e.breakage,
+                            &_e.friction, &_e.damping, &_e.external_work, &_e.prescribed_work,
+                            &_e.body_kinetic, &_e.body_contact, &_e.body_friction, &_e.removed};
+  for (std::size_t k = 0; k < e.size(); ++k)
+    *fields[k] = e[k];
   _counters.friction = c[0];
   _counters.breakage = c[1];
   _counters.cohesion_demand = c[2];

@@ -251,7 +251,7 @@ private:
     _duration = run.duration > 0.0 ? run.duration : 4.0 * _crossing;
     _nsteps = static_cast<std::int64_t>(std::ceil(_duration / _dt));
     _crossing_steps = std::max<std::int64_t>(1, static_cast<std::int64_t>(_crossing / _dt));
-    _solver = std::make_unique<DemSolver>(_p, _links, mat, _dt, run.damping, 0.5 * _rmin);
+    _solver = std::make_unique<DemSolver>(_p, _links, mat, _dt, run.damping, run.skin > 0.0 ? run.skin : 0.5 * _rmin);
     set_up_supports();
     const double margin = run.domain_margin > 0.0 ? run.domain_margin : _s.target.thickness;
     _solver->set_domain({_lo[0] - margin, _lo[1] - margin, _lo[2] - margin},
@@ -389,7 +389,8 @@ private:
          << path_velocity() << ',' << contact_force() << ',' << _solver->body_contacts(0).ids.size() << ','
          << broken() << ',' << _solver->removed().count << ',' << e.body_kinetic << ',' << e.kinetic << ','
          << e.elastic + e.body_contact << ','
-         << e.softening + e.breakage + e.friction + e.body_friction + e.damping << ',' << e.removed << ','
+         << e.softening + e.compaction + e.breakage + e.friction + e.body_friction + e.damping << ','
+         << e.removed << ','
          << e.imbalance() << '\n';
   }
 
@@ -563,6 +564,7 @@ private:
                       {"elastic_j", e.elastic},
                       {"contact_elastic_j", e.body_contact},
                       {"softening_j", e.softening},
+                      {"compaction_j", e.compaction},
                       {"breakage_j", e.breakage},
                       {"friction_j", e.friction},
                       {"projectile_friction_j", e.body_friction},

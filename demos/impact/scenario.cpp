@@ -168,6 +168,12 @@ public:
     throw std::runtime_error("scenario " + _file + ": " + (key == _section ? key : _section + "." + key) + " " + what);
   }
 
+  /// @throws std::runtime_error naming the file and the section.
+  [[noreturn]] void fail_section(const std::string& what) const
+  {
+    throw std::runtime_error("scenario " + _file + ": [" + _section + "]: " + what);
+  }
+
   /// Every key of the file must have been read.
   void check_unknown() const
   {
@@ -296,9 +302,24 @@ MaterialSpec read_material_section(Reader& r, const std::filesystem::path& scena
   c.phi_c_deg = r.number("phi_c_deg", c.phi_c_deg, angle, "contact friction angle [degree]");
   c.rate_fc = r.number("rate_fc_pa", c.rate_fc, Allowed::positive(1e10).or_value(0.0, "no rate effect"),
                        "strain-rate effect: the Malvar-Ross law's compressive strength f_c [Pa]");
+  c.compaction.onset = r.number("compaction_onset", c.compaction.onset, Allowed::open(0.0, 1.0).or_value(0.0, "no compaction"),
+                                "compaction: the links' compressive strain where pores start to collapse [-]");
+  c.compaction.stiffness = r.number("compaction_stiffness", c.compaction.stiffness, Allowed::above(0.0, 1.0),
+                                    "compaction: the links' tangent stiffness while pores collapse, over K_n [-]");
+  c.compaction.lock = r.number("compaction_lock", c.compaction.lock > 0.0 ? c.compaction.lock : 0.05,
+                               Allowed::open(0.0, 1.0),
+                               "compaction: the compressive strain where the pores are closed (K_n again), above "
+                               "the onset [-]");
   m.links_per_sphere = r.number("links_per_sphere", f.links_per_sphere, Allowed::positive(100.0),
                                 "mean links per sphere in the bulk (sets lambda) [-]");
-  c.validate();
+  try
+  {
+    c.validate();
+  }
+  catch (const std::exception& e)
+  {
+    r.fail_section(e.what());
+  }
   m.material = c;
   return m;
 }
@@ -362,6 +383,9 @@ RunSpec read_run(Reader& r)
                                                "steps between rows of history.csv"));
   s.domain_margin = r.number("domain_margin_m", s.domain_margin, Allowed::positive(100.0).or_value(0.0, "the thickness"),
                              "spheres farther than this from the slab are removed (fragments) [m]");
+  s.skin = r.number("neighbour_skin_m", s.skin, Allowed::positive(1.0).or_value(0.0, "half the smallest radius"),
+                    "neighbour-list skin: pairs closer than contact + skin are listed, the list rebuilt when a "
+                    "sphere has moved skin / 2 [m]");
   return s;
 }
 

@@ -66,6 +66,7 @@ struct RunSpec
   int frames = 40;             ///< XDMF frames over the crossing time
   int history_every = 0;       ///< steps between history rows; 0 = 1000 over the crossing time
   double domain_margin = 0.0;  ///< the domain: the slab grown by this [m]; 0 = its thickness
+  double skin = 0.0;           ///< neighbour-list skin [m]; 0 = half the smallest radius
 };
 
 struct Scenario

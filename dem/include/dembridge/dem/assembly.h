@@ -32,6 +32,9 @@ struct Material
   /// the Malvar-Ross law, whose factor of the link's own tensile strain rate
   /// multiplies its T and C0 while it is elastic.
   double rate_fc = 0.0;
+  /// Compaction of the links in compression (docs/method.md section 1.6c):
+  /// off while compaction.onset is 0.
+  CompactionLaw compaction;
   /// @throws std::runtime_error naming the value and its allowed range.
   void validate() const;
   /// The law's parameters for a pair of radii at initial distance d_init.
@@ -106,6 +109,10 @@ struct Links
   /// factor of the link's strain rate while elastic, then fixed. Empty: 1
   /// everywhere (DemSolver sizes it when the material has a rate effect).
   std::vector<double> strength;
+  /// Largest compressive strain -delta / D_init each link reached (the
+  /// compaction's history, Material::compaction). Empty: no compaction
+  /// (DemSolver sizes it when the material compacts).
+  std::vector<double> compaction;
   std::size_t size() const { return a.size(); }
   std::size_t count(LinkState s) const;
 };

@@ -53,6 +53,9 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
 /// Energy dissipated by tensile softening of all links [J].
 double softening_energy(const Particles& p, const Links& l, const Material& mat);
 
+/// Energy dissipated by the links' compaction (Material::compaction) [J].
+double compaction_energy(const Links& l, const Material& mat);
+
 /// Action of the linearised stiffness of the intact links about the current
 /// positions, f = K u (the links' weights included; contacts left out):
 /// u and f hold 6 values per particle, translations (n, 3) then rotations

@@ -54,6 +54,48 @@ struct NormalForce
 /// @param delta_max largest elongation reached so far (history; start at 0)
 NormalForce link_normal_force(double delta, double delta_max, const LinkLaw& p);
 
+/// Compaction of a link in compression (docs/method.md section 1.6c): the
+/// pores of concrete collapse under high confinement. In terms of the
+/// link's compressive strain e = -delta / D_init, the compression force
+/// follows the envelope
+///   f(e) = K_n D_init e                                   e <= onset
+///   f(e) = K_n D_init (onset + stiffness (e - onset))     onset < e <= lock
+///   f(e) = K_n D_init (onset + stiffness (lock - onset) + e - lock)   e > lock
+/// (pores collapsing at `stiffness` x K_n, then closed: K_n again); below
+/// the largest strain reached, e_max, the link unloads and reloads
+/// elastically (K_n) from the permanent set it left. The set shifts the
+/// rest of the law: elongation, softening and rupture count from it.
+struct CompactionLaw
+{
+  double onset = 0.0;     ///< compressive strain where pores start to collapse [-]; 0 = no compaction
+  double stiffness = 1.0; ///< tangent stiffness while compacting / K_n, in (0, 1] [-]
+  double lock = 0.0;      ///< compressive strain where the pores are closed, > onset [-]
+  bool on() const { return onset > 0.0; }
+};
+
+/// The envelope's compression force over K_n D_init [-] (a strain).
+inline double compaction_envelope(double e, const CompactionLaw& c)
+{
+  if (e <= c.onset)
+    return e;
+  if (e <= c.lock)
+    return c.onset + c.stiffness * (e - c.onset);
+  return c.onset + c.stiffness * (c.lock - c.onset) + (e - c.lock);
+}
+
+/// The permanent set (<= 0) [m] the largest compressive strain e_max leaves:
+/// the elongation where the elastic unloading from the envelope at e_max
+/// reaches zero force, -D_init (e_max - envelope(e_max)).
+inline double compaction_set(double e_max, double d_init, const CompactionLaw& c)
+{
+  return e_max > c.onset ? -d_init * (e_max - compaction_envelope(e_max, c)) : 0.0;
+}
+
+/// Energy dissipated by compaction once the largest compressive strain is
+/// e_max [J]: the work along the envelope, K_n D_init^2 times its integral
+/// up to e_max, less what the elastic unloading gives back, f^2 / (2 K_n).
+double compaction_dissipation(double e_max, double kn, double d_init, const CompactionLaw& c);
+
 /// Dynamic increase factor of concrete's tensile strength at the strain rate
 /// `rate` [1/s], Malvar and Ross (1998), for a compressive strength fc [Pa]:
 ///   DIF = (rate / rate_s)^delta            rate_s < rate <= 1 /s
@@ -240,6 +282,21 @@ inline NormalForce link_normal_force(double delta, double delta_max, const LinkL
   // softened: on the envelope at dm, on the secant below it
   const double f_dm = f_peak - p.kn / p.zeta * (dm - de);
   return {f_dm / dm * delta, dm, NormalState::softening};
+}
+
+inline double compaction_dissipation(double e_max, double kn, double d_init, const CompactionLaw& c)
+{
+  if (!(e_max > c.onset))
+    return 0.0;
+  // the envelope's integral over [0, e_max], piece by piece (trapezoids of
+  // straight pieces: exact)
+  auto area = [&](double a, double b) { return 0.5 * (compaction_envelope(a, c) + compaction_envelope(b, c)) * (b - a); };
+  double integral = area(0.0, c.onset);
+  integral += area(c.onset, std::min(e_max, c.lock));
+  if (e_max > c.lock)
+    integral += area(c.lock, e_max);
+  const double f = compaction_envelope(e_max, c);
+  return kn * d_init * d_init * (integral - 0.5 * f * f);
 }
 
 inline double malvar_ross_dif(double rate, double fc)

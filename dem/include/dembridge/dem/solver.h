@@ -25,13 +25,14 @@ namespace dembridge::dem
 
 struct ForceScratch;
 
-/// Energy budget [J]: kinetic + elastic + softening + breakage + friction +
+/// Energy budget [J]: kinetic + elastic + softening + compaction + breakage + friction +
 /// damping + the rigid bodies' kinetic, contact and friction energies =
 /// initial + external_work + prescribed_work.
 struct DemEnergy
 {
   double initial = 0.0, kinetic = 0.0, elastic = 0.0, softening = 0.0, breakage = 0.0,
          friction = 0.0, damping = 0.0, external_work = 0.0, prescribed_work = 0.0;
+  double compaction = 0.0;    ///< dissipated by the links' compaction (state: recomputed, not booked)
   double body_kinetic = 0.0;  ///< the moving bodies' kinetic energy
   double body_contact = 0.0;  ///< elastic energy of the sphere-body contacts
   double body_friction = 0.0; ///< dissipated by sliding on the bodies
@@ -40,8 +41,8 @@ struct DemEnergy
   double removed = 0.0;
   double imbalance() const
   {
-    return kinetic + elastic + softening + breakage + friction + damping + body_kinetic + body_contact
-           + body_friction + removed - initial - external_work - prescribed_work;
+    return kinetic + elastic + softening + compaction + breakage + friction + damping + body_kinetic
+           + body_contact + body_friction + removed - initial - external_work - prescribed_work;
   }
 };
 
