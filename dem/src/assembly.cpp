@@ -41,6 +41,8 @@ void Material::validate() const
     impl::out_of_range("contact friction angle phi_c", phi_c_deg, "in [0, 90) degrees");
   if (!(rate_fc >= 0.0) || !std::isfinite(rate_fc))
     impl::out_of_range("strain-rate law's compressive strength f_c", rate_fc, ">= 0 Pa (0 = no rate effect)");
+  if (!(rate_max >= 0.0) || !std::isfinite(rate_max))
+    impl::out_of_range("strain-rate cap", rate_max, ">= 0 1/s (0 = none)");
   const CompactionLaw& c = compaction;
   if (!(c.onset >= 0.0 && c.onset < 1.0))
     impl::out_of_range("compaction onset strain", c.onset, "in [0, 1) (0 = no compaction)");

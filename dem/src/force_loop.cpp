@@ -285,7 +285,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
         const double* va = &p.v[3 * i];
         const double* vb = &p.v[3 * l.b[k]];
         const double rate = ((vb[0] - va[0]) * n[0] + (vb[1] - va[1]) * n[1] + (vb[2] - va[2]) * n[2]) / l.d0[k];
-        f = std::max(f, malvar_ross_dif(rate, mat.rate_fc));
+        f = std::max(f, malvar_ross_dif(mat.rate_max > 0.0 ? std::min(rate, mat.rate_max) : rate, mat.rate_fc));
       }
       law.tensile *= f;
       law.cohesion *= f;

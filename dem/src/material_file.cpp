@@ -45,6 +45,8 @@ MaterialFile read_material(const std::filesystem::path& file)
   // optional: the strain-rate effect (absent: none)
   if (j.contains("rate_fc_pa"))
     t.rate_fc = get("rate_fc_pa");
+  if (j.contains("rate_max_1_s"))
+    t.rate_max = get("rate_max_1_s");
   // optional: compaction (absent: none)
   if (j.contains("compaction_onset"))
     t.compaction = {get("compaction_onset"), get("compaction_stiffness"), get("compaction_lock")};
@@ -81,6 +83,8 @@ void write_material(const std::filesystem::path& file, const MaterialFile& m)
   j["links_per_sphere"] = m.links_per_sphere;
   if (t.rate_fc > 0.0)
     j["rate_fc_pa"] = t.rate_fc;
+  if (t.rate_max > 0.0)
+    j["rate_max_1_s"] = t.rate_max;
   if (t.compaction.on())
   {
     j["compaction_onset"] = t.compaction.onset;

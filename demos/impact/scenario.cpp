@@ -302,6 +302,8 @@ MaterialSpec read_material_section(Reader& r, const std::filesystem::path& scena
   c.phi_c_deg = r.number("phi_c_deg", c.phi_c_deg, angle, "contact friction angle [degree]");
   c.rate_fc = r.number("rate_fc_pa", c.rate_fc, Allowed::positive(1e10).or_value(0.0, "no rate effect"),
                        "strain-rate effect: the Malvar-Ross law's compressive strength f_c [Pa]");
+  c.rate_max = r.number("rate_max_1_s", c.rate_max, Allowed::positive(1e9).or_value(0.0, "no cap"),
+                        "strain-rate effect: the rate above which the factor stops growing [1/s]");
   c.compaction.onset = r.number("compaction_onset", c.compaction.onset, Allowed::open(0.0, 1.0).or_value(0.0, "no compaction"),
                                 "compaction: the links' compressive strain where pores start to collapse [-]");
   c.compaction.stiffness = r.number("compaction_stiffness", c.compaction.stiffness, Allowed::above(0.0, 1.0),

@@ -32,6 +32,11 @@ struct Material
   /// the Malvar-Ross law, whose factor of the link's own tensile strain rate
   /// multiplies its T and C0 while it is elastic.
   double rate_fc = 0.0;
+  /// The strain rate above which the rate factor stops growing [1/s]; 0 =
+  /// no cap. Malvar and Ross fitted their law to data up to ~100 /s; the
+  /// links near a projectile see 1e3-1e4 /s, where the law's cube root
+  /// would give factors above 15.
+  double rate_max = 0.0;
   /// Compaction of the links in compression (docs/method.md section 1.6c):
   /// off while compaction.onset is 0.
   CompactionLaw compaction;

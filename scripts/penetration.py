@@ -1,0 +1,119 @@
+#!/usr/bin/python3
+"""Penetration depths of a rigid projectile into a thick concrete block, run
+at several striking speeds, against two published formulas for rigid
+ogive-nose projectiles into semi-infinite concrete:
+
+- Forrestal et al. (1994, 1996): a crater of depth 2 d, then the tunnel's
+  resistance (pi d^2 / 4) (S f_c + N* rho V^2), S = 82.6 f_c^-0.544 (f_c in MPa):
+      X = 2 M / (pi d^2 N* rho) ln(1 + N* rho V1^2 / (S f_c)) + 2 d,
+      V1^2 = (M V^2 - (pi/2) d^3 S f_c) / (M + (pi/2) d^3 N* rho);
+- Li and Chen (2003): the same resistance with S = 72 f_c^-0.5 and a crater
+  of depth k d, k = 0.707 + h/d (h the nose length), in the dimensionless
+  form X/d = (2 N / pi) ln((1 + I / N) / (1 + pi k / (4 N))) + k, with
+  I = M V^2 / (S f_c d^3) and N = M / (N* rho d^3), or, for X/d <= k,
+  X/d = sqrt((4 k I / pi) (1 + pi k / (4 N)) / (1 + I / N)).
+N* = (8 psi - 1) / (24 psi^2) for an ogive of CRH psi. These are fits to test
+series with 10-30 % scatter: envelopes, not exact values.
+
+Runs build/bin/impact SCENARIO --set projectile.velocity_m_s=V for each V
+into OUT/v<V>/ (a run already complete is not redone), and writes
+OUT/penetration.json and OUT/penetration.csv: the depth run and the two
+formulas' at each speed. f_c is the material file's measured compressive
+strength (its "macroscopic" block), or --fc.
+
+Usage: /usr/bin/python3 scripts/penetration.py SCENARIO OUT V1 V2 ... [--set KEY=VALUE ...]
+       [--fc PA] [--impact build/bin/impact]
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+
+
+def nose_factor(psi):
+    return (8.0 * psi - 1.0) / (24.0 * psi * psi)
+
+
+def forrestal(M, d, psi, rho, fc, V):
+    S = 82.6 * (fc / 1e6) ** -0.544
+    N = nose_factor(psi)
+    v1sq = (M * V * V - math.pi / 2 * d ** 3 * S * fc) / (M + math.pi / 2 * d ** 3 * N * rho)
+    if v1sq <= 0:  # stops in the crater: x = 2d sqrt(M V^2 / (pi/2 d^3 S fc)) (force linear in depth)
+        return 2 * d * math.sqrt(M * V * V / (math.pi / 2 * d ** 3 * S * fc))
+    return 2 * M / (math.pi * d * d * N * rho) * math.log(1 + N * rho * v1sq / (S * fc)) + 2 * d
+
+
+def li_chen(M, d, psi, rho, fc, V):
+    S = 72.0 * (fc / 1e6) ** -0.5
+    Ns = nose_factor(psi)
+    h = d * math.sqrt(psi - 0.25)
+    k = 0.707 + h / d
+    I = M * V * V / (S * fc * d ** 3)
+    N = M / (Ns * rho * d ** 3)
+    deep = 2 * N / math.pi * math.log((1 + I / N) / (1 + math.pi * k / (4 * N))) + k
+    if deep > k:
+        return d * deep
+    return d * math.sqrt(4 * k * I / math.pi * (1 + math.pi * k / (4 * N)) / (1 + I / N))
+
+
+def main(argv):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("scenario")
+    ap.add_argument("out")
+    ap.add_argument("velocities", type=float, nargs="+")
+    ap.add_argument("--set", action="append", default=[])
+    ap.add_argument("--fc", type=float, default=0.0)
+    ap.add_argument("--impact", default=os.path.join(os.path.dirname(__file__), "..", "build", "bin", "impact"))
+    args = ap.parse_args(argv)
+    os.makedirs(args.out, exist_ok=True)
+    rows = []
+    for V in args.velocities:
+        d = os.path.join(args.out, f"v{V:g}")
+        summary = os.path.join(d, "summary.json")
+        done = False
+        if os.path.exists(summary):
+            with open(summary) as f:
+                done = json.load(f).get("completed", False)
+        if not done:
+            cmd = [args.impact, args.scenario, "--set", f"projectile.velocity_m_s={V}", "--plot", "0",
+                   "--output", d, "--summary", summary]
+            for s in args.set:
+                cmd += ["--set", s]
+            print("running:", " ".join(cmd), flush=True)
+            with open(os.path.join(args.out, f"v{V:g}.log"), "w") as log:
+                if subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT).returncode != 0:
+                    raise SystemExit(f"the run at {V} m/s failed: see {log.name}")
+        with open(summary) as f:
+            s = json.load(f)
+        with open(os.path.join(d, "scenario.json")) as f:
+            sc = json.load(f)
+        fc = args.fc
+        if fc <= 0:
+            with open(sc["material.file"]) as f:
+                fc = json.load(f)["macroscopic"]["compressive_strength_pa"]
+        M, dia, psi = s["projectile_mass_kg"], sc["projectile.diameter_m"], sc["projectile.crh"]
+        rho = sc["material.density_kg_m3"]
+        xf, xl = forrestal(M, dia, psi, rho, fc, V), li_chen(M, dia, psi, rho, fc, V)
+        rows.append({"striking_m_s": V, "depth_m": s["penetration_depth_m"], "forrestal_m": xf, "li_chen_m": xl,
+                     "to_forrestal": s["penetration_depth_m"] / xf - 1, "to_li_chen": s["penetration_depth_m"] / xl - 1,
+                     "perforated": s["perforated"], "outcome": s["outcome"], "thickness_m": sc["target.thickness_m"],
+                     "particles": s["particles"], "imbalance_share": s["energy"]["imbalance_share"],
+                     "wall_s": s["wall_s"], "fc_pa": fc})
+        r = rows[-1]
+        print(f"{V:7.1f} m/s: depth {1e3 * r['depth_m']:6.1f} mm, Forrestal {1e3 * xf:6.1f} mm "
+              f"({100 * r['to_forrestal']:+.0f} %), Li-Chen {1e3 * xl:6.1f} mm ({100 * r['to_li_chen']:+.0f} %)"
+              + ("  PERFORATED: the block is too thin" if s["perforated"] else ""))
+    with open(os.path.join(args.out, "penetration.json"), "w") as f:
+        json.dump(rows, f, indent=2)
+    with open(os.path.join(args.out, "penetration.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
