@@ -15,6 +15,8 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
 {
   double e = 0.0;
   const LinkLaw base = mat.law(1.0, 1.0, 1.0);
+  // as the force loop decides it
+  const bool compacting = mat.compaction.on() && l.compaction.size() == l.size();
   for (std::size_t k = 0; k < l.size(); ++k)
   {
     if (l.state[k] != LinkState::intact)
@@ -33,7 +35,7 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
       law.cohesion *= l.strength[k];
     }
     double delta = std::sqrt(dot3(d, d)) - l.d0[k];
-    if (!l.compaction.empty())
+    if (compacting)
       delta -= compaction_set(l.compaction[k], l.d0[k], mat.compaction); // from the set
     const double fn = link_normal_force(delta, l.delta_max[k], law).fn;
     const double wk = l.weight.empty() ? 1.0 : l.weight[k];
@@ -51,9 +53,7 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
     const double rs = p.r[i] + p.r[j];
     // a broken compacted link's spheres touch from its rest distance (force_loop.cpp)
     const std::int32_t k = nl.link[q];
-    const double touch = !l.compaction.empty() && k >= 0
-                             ? std::min(rs, l.d0[k] + compaction_set(l.compaction[k], l.d0[k], mat.compaction))
-                             : rs;
+    const double touch = compacting && k >= 0 ? rs + compaction_set(l.compaction[k], l.d0[k], mat.compaction) : rs;
     const double gap = touch - std::sqrt(dot3(d, d));
     const double kn = mat.youngs_modulus * interaction_surface(p.r[i], p.r[j]) / rs * cf.cn;
     const double wq = p.weight.empty() ? 1.0 : 0.5 * (p.weight[i] + p.weight[j]);
@@ -84,7 +84,7 @@ double softening_energy(const Particles& p, const Links& l, const Material& mat)
 double compaction_energy(const Links& l, const Material& mat)
 {
   double e = 0.0;
-  if (l.compaction.empty())
+  if (!(mat.compaction.on() && l.compaction.size() == l.size()))
     return e;
   for (std::size_t k = 0; k < l.size(); ++k)
     if (l.compaction[k] > mat.compaction.onset)

@@ -217,8 +217,9 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   const bool factored = l.strength.size() == l.size() && !l.strength.empty();
   const bool rated = factored && mat.rate_fc > 0.0 && dt > 0.0;
   const bool compacting = mat.compaction.on() && l.compaction.size() == l.size();
+  // (the set, <= 0, is 0 for a link that never passed the onset)
   auto compacted_touch = [&](std::int32_t k, double rs)
-  { return std::min(rs, l.d0[k] + compaction_set(l.compaction[k], l.d0[k], mat.compaction)); };
+  { return rs + compaction_set(l.compaction[k], l.d0[k], mat.compaction); };
   const double* rad = p.r.data();
   bool short_team = false;
   std::size_t spinning = np; // a sphere turning by more than 1 rad in the step
@@ -264,12 +265,14 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     // cache line per link (measured: 5 % slower at 200k spheres)
     law.s_int = pair_surface(rec[record * i + 3], rec[record * l.b[k] + 3]);
     double delta = D - l.d0[k];
+    double e_max_old = 0.0; // the compaction at the step's start
     if (compacting)
     {
       // compaction (law.h): the largest compressive strain so far, and the
       // set it left, from which the rest of the law counts
       const double e = -delta / l.d0[k];
       double& e_max = l.compaction[k];
+      e_max_old = e_max;
       if (e > e_max)
         e_max = e;
       delta -= compaction_set(e_max, l.d0[k], mat.compaction);
@@ -279,16 +282,16 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       // the rate effect: while the link is elastic, its strength factor
       // follows the largest Malvar-Ross factor of its tensile strain rate
       // (v(n+1/2) of its spheres along the normal, over D_init)
-      double& f = l.strength[k];
-      if (rated && l.delta_max[k] * law.kn <= law.s_int * law.tensile * f)
+      double& factor = l.strength[k];
+      if (rated && l.delta_max[k] * law.kn <= law.s_int * law.tensile * factor)
       {
         const double* va = &p.v[3 * i];
         const double* vb = &p.v[3 * l.b[k]];
         const double rate = ((vb[0] - va[0]) * n[0] + (vb[1] - va[1]) * n[1] + (vb[2] - va[2]) * n[2]) / l.d0[k];
-        f = std::max(f, malvar_ross_dif(mat.rate_max > 0.0 ? std::min(rate, mat.rate_max) : rate, mat.rate_fc));
+        factor = std::max(factor, malvar_ross_dif(mat.rate_max > 0.0 ? std::min(rate, mat.rate_max) : rate, mat.rate_fc));
       }
-      law.tensile *= f;
-      law.cohesion *= f;
+      law.tensile *= factor;
+      law.cohesion *= factor;
     }
     const double delta_max_old = l.delta_max[k];
     const NormalForce nf = link_normal_force(delta, delta_max_old, law);
@@ -333,13 +336,23 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       // stored, elastic or on the secant, plus the work fn_old (delta -
       // delta_old) / 2), the elongation at the step's start from the
       // drift, delta_old = delta - dt (v_b - v_a) . n with v(n+1/2).
+      // All from the state at the step's start: its softening and
+      // compaction (states whose energies count apart) are put back, and
+      // the elongations count from the set it had then.
+      l.delta_max[k] = delta_max_old;
+      double from_set = delta;
+      if (compacting)
+      {
+        l.compaction[k] = e_max_old;
+        from_set = (D - l.d0[k]) - compaction_set(e_max_old, l.d0[k], mat.compaction);
+      }
       const double* va = &p.v[3 * i];
       const double* vb = &p.v[3 * l.b[k]];
       const double delta_old =
-          delta - dt * ((vb[0] - va[0]) * n[0] + (vb[1] - va[1]) * n[1] + (vb[2] - va[2]) * n[2]);
+          from_set - dt * ((vb[0] - va[0]) * n[0] + (vb[1] - va[1]) * n[1] + (vb[2] - va[2]) * n[2]);
       const double fn_old = link_normal_force(delta_old, delta_max_old, law).fn;
       s.broken[omp_get_thread_num()].emplace_back(
-          k, wk * (0.5 * fn_old * delta + 0.5 * dot3(fs_old, trial.data()) / law.ks));
+          k, wk * (0.5 * fn_old * from_set + 0.5 * dot3(fs_old, trial.data()) / law.ks));
       std::fill(fs_old, fs_old + 3, 0.0);
       std::fill(out, out + 6, 0.0);
       return false;
@@ -430,8 +443,8 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     const double D = n[3];
     const double rs = rad[i] + rad[j];
     // a compacted link that broke left its spheres closer than before: they
-    // touch from its rest distance D_init + set on (no force from the
-    // overlap the compaction made)
+    // touch from R_a + R_b + set on (no force from the overlap the
+    // compaction made)
     const double touch = compacting && nl.link[q] >= 0 ? compacted_touch(nl.link[q], rs) : rs;
     double* fs_old = &nl.fs[3 * q];
     if (D >= touch) // (a listed pair never has an intact link: NeighbourList)

@@ -48,10 +48,10 @@ Crater walk_layers(const std::vector<double>& volume, const std::vector<double>&
   {
     const double area = volume[k] / (in.layer * in.fraction);
     const double d = std::sqrt(4.0 * area / std::numbers::pi);
-    if (k == 0)
-      c.diameter = d;
     if (d <= in.tunnel)
       break;
+    if (k == 0)
+      c.diameter = d;
     c.depth = std::min(in.thickness, (k + 1) * in.layer);
     c.mass += mass[k];
   }
@@ -76,7 +76,12 @@ std::pair<Crater, Crater> measure_craters(const CraterInput& in)
     vr[kr] += v;
     mr[kr] += in.m[i];
   }
-  return {walk_layers(vf, mf, in), walk_layers(vr, mr, in)};
+  // the scab's layers end where the crater's begin (a crater through the
+  // whole slab leaves no scab of its own)
+  const Crater front = walk_layers(vf, mf, in);
+  const auto in_front = static_cast<std::size_t>(std::ceil(front.depth / in.layer - 1e-9));
+  vr.resize(layers - std::min(layers, in_front));
+  return {front, walk_layers(vr, mr, in)};
 }
 
 namespace
@@ -150,6 +155,9 @@ private:
                   << std::endl;
       _pk = generate_packing(region, po);
     }
+    if (_pk.size() == 0)
+      throw std::runtime_error("target: no sphere in the slab (target.mean_radius_m " + fmt(t.mean_radius)
+                               + " m against its size): use smaller spheres");
     double solid = 0.0;
     for (double r : _pk.r)
       solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
@@ -426,7 +434,9 @@ private:
     const bool touching = !_solver->body_contacts(0).ids.empty();
     _touched = _touched || touching;
     _peak_force = std::max(_peak_force, contact_force());
-    if (_touched && path_velocity() <= 0.0)
+    // stopped: at rest, rebounding, or coasting below 2 % of the striking
+    // speed (0.04 % of its energy left: the depth no longer changes)
+    if (_touched && path_velocity() <= 0.02 * _s.projectile.velocity)
       return Outcome::stopped;
     if (-tail()[2] > _s.target.thickness + _s.projectile.diameter && !touching)
       return Outcome::perforated;
@@ -489,7 +499,7 @@ private:
     _out["perforated"] = perforated;
     _out["residual_velocity_m_s"] = perforated ? std::sqrt(dot(b.v, b.v)) : 0.0;
     _out["final_path_velocity_m_s"] = path_velocity();
-    _out["penetration_depth_m"] = std::min(_max_depth, _s.target.thickness);
+    _out["penetration_depth_m"] = std::clamp(_max_depth, 0.0, _s.target.thickness);
     _out["tip_depth_max_m"] = _max_depth;
     _out["peak_contact_force_n"] = _peak_force;
     measure_damage();

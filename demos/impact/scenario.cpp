@@ -168,12 +168,6 @@ public:
     throw std::runtime_error("scenario " + _file + ": " + (key == _section ? key : _section + "." + key) + " " + what);
   }
 
-  /// @throws std::runtime_error naming the file and the section.
-  [[noreturn]] void fail_section(const std::string& what) const
-  {
-    throw std::runtime_error("scenario " + _file + ": [" + _section + "]: " + what);
-  }
-
   /// Every key of the file must have been read.
   void check_unknown() const
   {
@@ -314,15 +308,7 @@ MaterialSpec read_material_section(Reader& r, const std::filesystem::path& scena
                                "the onset [-]");
   m.links_per_sphere = r.number("links_per_sphere", f.links_per_sphere, Allowed::positive(100.0),
                                 "mean links per sphere in the bulk (sets lambda) [-]");
-  try
-  {
-    c.validate();
-  }
-  catch (const std::exception& e)
-  {
-    r.fail_section(e.what());
-  }
-  m.material = c;
+  m.material = c; // validated once every key is known (read_scenario)
   return m;
 }
 
@@ -429,7 +415,15 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
     apply_set(root, set);
   Reader r(root, file.string());
   Scenario s = read_sections(r, file);
-  r.check_unknown();
+  r.check_unknown(); // a misspelt key first, then the values' consistency
+  try
+  {
+    s.material.material.validate();
+  }
+  catch (const std::exception& e)
+  {
+    throw std::runtime_error("scenario " + file.string() + ": [material]: " + e.what());
+  }
   return s;
 }
 
