@@ -52,6 +52,28 @@ def fit_lambert_jonas(runs):
             "v_bl_bounds_m_s": [lo, hi]}
 
 
+def run_at(impact, scenario, out, v, sets):
+    """Runs the scenario at striking speed v into OUT/v<V>/ unless a complete
+    run is there already; returns its summary."""
+    d = os.path.join(out, f"v{v:g}")
+    summary = os.path.join(d, "summary.json")
+    done = False
+    if os.path.exists(summary):
+        with open(summary) as f:
+            done = json.load(f).get("completed", False)
+    if not done:
+        cmd = [impact, scenario, "--set", f"projectile.velocity_m_s={v}", "--plot", "0", "--output", d,
+               "--summary", summary]
+        for s in sets:
+            cmd += ["--set", s]
+        print("running:", " ".join(cmd), flush=True)
+        with open(os.path.join(out, f"v{v:g}.log"), "w") as log:
+            if subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT).returncode != 0:
+                raise SystemExit(f"the run at {v} m/s failed: see {log.name}")
+    with open(summary) as f:
+        return json.load(f)
+
+
 def residual(fit, v):
     if fit is None or v <= fit["v_bl_m_s"]:
         return 0.0
@@ -74,23 +96,7 @@ def main(argv):
     os.makedirs(args.out, exist_ok=True)
     runs, table = [], []
     for v in args.velocities:
-        d = os.path.join(args.out, f"v{v:g}")
-        summary = os.path.join(d, "summary.json")
-        done = False
-        if os.path.exists(summary):
-            with open(summary) as f:
-                done = json.load(f).get("completed", False)
-        if not done:
-            cmd = [args.impact, args.scenario, "--set", f"projectile.velocity_m_s={v}", "--plot", "0",
-                   "--output", d, "--summary", summary]
-            for s in args.set:
-                cmd += ["--set", s]
-            print("running:", " ".join(cmd), flush=True)
-            with open(os.path.join(args.out, f"v{v:g}.log"), "w") as log:
-                if subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT).returncode != 0:
-                    raise SystemExit(f"the run at {v} m/s failed: see {log.name}")
-        with open(summary) as f:
-            s = json.load(f)
+        s = run_at(args.impact, args.scenario, args.out, v, args.set)
         runs.append((v, s["residual_velocity_m_s"] if s["perforated"] else 0.0))
         table.append({"striking_m_s": v, "residual_m_s": runs[-1][1], "perforated": s["perforated"],
                       "penetration_depth_m": s["penetration_depth_m"],

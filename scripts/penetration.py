@@ -29,8 +29,9 @@ import csv
 import json
 import math
 import os
-import subprocess
 import sys
+
+from ballistic import run_at
 
 
 def nose_factor(psi):
@@ -71,23 +72,8 @@ def main(argv):
     os.makedirs(args.out, exist_ok=True)
     rows = []
     for V in args.velocities:
+        s = run_at(args.impact, args.scenario, args.out, V, args.set)
         d = os.path.join(args.out, f"v{V:g}")
-        summary = os.path.join(d, "summary.json")
-        done = False
-        if os.path.exists(summary):
-            with open(summary) as f:
-                done = json.load(f).get("completed", False)
-        if not done:
-            cmd = [args.impact, args.scenario, "--set", f"projectile.velocity_m_s={V}", "--plot", "0",
-                   "--output", d, "--summary", summary]
-            for s in args.set:
-                cmd += ["--set", s]
-            print("running:", " ".join(cmd), flush=True)
-            with open(os.path.join(args.out, f"v{V:g}.log"), "w") as log:
-                if subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT).returncode != 0:
-                    raise SystemExit(f"the run at {V} m/s failed: see {log.name}")
-        with open(summary) as f:
-            s = json.load(f)
         with open(os.path.join(d, "scenario.json")) as f:
             sc = json.load(f)
         fc = args.fc
