@@ -34,9 +34,9 @@ struct ImpactConfig
 /// the packing fraction gives the area they occupied, and its equivalent
 /// diameter. The front crater is the run of layers from the struck face
 /// whose equivalent diameter exceeds twice the projectile's (wider than its
-/// tunnel); its diameter is that of the first layer, its depth where the run
-/// ends, its mass the detached mass in it. The rear scab likewise from the
-/// rear face.
+/// tunnel); its diameter is that of the first layer (0 without a crater),
+/// its depth where the run ends, its mass the detached mass in it. The rear
+/// scab likewise from the rear face, over the layers the crater left.
 struct Crater
 {
   double diameter = 0.0; ///< [m]
