@@ -3,6 +3,7 @@
 // (checkpoint.h).
 #include "dembridge/dem/solver.h"
 
+#include <array>
 #include <stdexcept>
 
 #include "force_loop.h"
@@ -100,6 +101,14 @@ void load_links(const Group& g, Links& l)
   }
 }
 } // namespace
+
+// The energies a checkpoint keeps, in its order, for save and load alike
+// (compaction is a state: energy() recomputes it).
+constexpr std::array booked_energies{
+    &DemEnergy::initial,         &DemEnergy::kinetic,      &DemEnergy::elastic,      &DemEnergy::softening,
+    &DemEnergy::breakage,        &DemEnergy::friction,     &DemEnergy::damping,      &DemEnergy::external_work,
+    &DemEnergy::prescribed_work, &DemEnergy::body_kinetic, &DemEnergy::body_contact, &DemEnergy::body_friction,
+    &DemEnergy::removed};
 
 // ---- NeighbourList --------------------------------------------------------------
 
@@ -215,9 +224,9 @@ void DemSolver::save(const Group& g) const
   g.write_int("steps", _steps);
   g.write("dt", _dt);
   g.write("damping", _c);
-  const std::vector<double> e{_e.initial,  _e.kinetic, _e.elastic, _e.softening, _e.breakage,
-                              _e.friction, _e.damping, _e.external_work, _e.prescribed_work,
-                              _e.body_kinetic, _e.body_contact, _e.body_friction, _e.removed};
+  std::vector<double> e;
+  for (auto field : booked_energies)
+    e.push_back(_e.*field);
   g.write("energy", e);
   const std::vector<double> c{_counters.friction, _counters.breakage, _counters.cohesion_demand,
                               _counters.track_cohesion ? 1.0 : 0.0};
@@ -274,15 +283,11 @@ void DemSolver::load(const Group& g)
   std::vector<double> e, c;
   g.read("energy", e);
   g.read("counters", c);
-  if (e.size() != 13 || c.size() != 4)
+  if (e.size() != booked_energies.size() || c.size() != 4)
     g.fail("energy", "unexpected length (file damaged?)");
-  // by name, in save()'s order (compaction is a state: recomputed by energy())
   _e = DemEnergy{};
-  double* const fields[] = {&_e.initial,  &_e.kinetic, &_e.elastic, &_e.softening, &_e.breakage,
-                            &_e.friction, &_e.damping, &_e.external_work, &_e.prescribed_work,
-                            &_e.body_kinetic, &_e.body_contact, &_e.body_friction, &_e.removed};
-  for (std::size_t k = 0; k < e.size(); ++k)
-    *fields[k] = e[k];
+  for (std::size_t k = 0; k < booked_energies.size(); ++k)
+    _e.*booked_energies[k] = e[k];
   _counters.friction = c[0];
   _counters.breakage = c[1];
   _counters.cohesion_demand = c[2];
