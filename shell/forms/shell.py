@@ -12,7 +12,15 @@
 #   bending   h^3/12 C : kappa   : kappa  / 2,  kappa = sym grad_s(theta x n)
 #   shear     k G h |gamma|^2 / 2,  gamma = grad_s(u.n) + (theta x n)
 #   drilling  c_d G h (theta.n - omega(u))^2 / 2, omega the in-plane rotation
-# C is the plane-stress elasticity tensor. Transverse shear is locking-free:
+# C is the plane-stress elasticity tensor. Reinforced-concrete sections add
+# their steel layers, smeared over the width (per cell, zero for plain
+# concrete): a layer of bars along the in-plane direction d, area a per unit
+# width at height z along n, has the strain eps_d + z kappa_d
+# (eps_d = d.eps.d, kappa_d = d.kappa.d) and adds, with E' = E_s - E (the
+# transformed section: the bars take the place of concrete),
+#   steel     E' (a eps_d^2 + 2 a z eps_d kappa_d + a z^2 kappa_d^2) / 2.
+# Summed over the layers of one direction, only the sums A = sum a,
+# S = sum a z and I = sum a z^2 enter, times E'. Transverse shear is locking-free:
 #   quadrilaterals: selective reduced integration (shear at one point);
 #   triangles: discrete shear gap (DSG3, Bletzinger et al. 2000), tied on the
 #     edges, averaged over the three choices of corner node so the result does
@@ -40,6 +48,12 @@ h = Constant(mesh)         # thickness [m]
 k_shear = Constant(mesh)   # shear correction factor [-] (5/6)
 c_drill = Constant(mesh)   # drilling penalty, fraction of G h [-]
 eta = Coefficient(W)       # energy weight [-]
+# Smeared reinforcement per cell (DG0, all zero for plain concrete):
+#  [0:3]  E' (A, S, I) of the bars along d1 [N/m, N, N m]
+#  [3:6]  E' (A, S, I) of the bars along d2 = n x d1
+#  [6:8]  (rho_s - rho) (A1 + A2), (rho_s - rho) (I1 + I2) [kg/m^2, kg]
+#  [8:11] a global vector whose projection on the cell's plane is d1
+steel = Coefficient(FunctionSpace(mesh, VectorElement("DG", cell, 0, dim=11)))
 
 U = Coefficient(V)         # state at which residuals are evaluated
 v = TestFunction(V)
@@ -85,6 +99,19 @@ kappa = sym2(P * grad_cross_n(Gt) * P.T)
 omega = 0.5 * (dot(t2, Gu * t1) - dot(t1, Gu * t2))
 grad_w = Gu.T * n           # tangential gradient of u.n (n constant per cell)
 
+# The bars' directions in the cell frame: d1 the projection of the given
+# vector, d2 normal to it in the plane (d1, d2, n right-handed). A plain cell
+# has a zero vector: the tiny term keeps d1 = 0 there instead of 0/0.
+d1p = P * as_vector([steel[8], steel[9], steel[10]])
+d1 = d1p / sqrt(dot(d1p, d1p) + 1e-300)
+d2 = as_vector([-d1[1], d1[0]])
+
+
+def steel_energy(d, k):
+    e_d, k_d = dot(d, eps * d), dot(d, kappa * d)
+    return 0.5 * (steel[k] * e_d**2 + 2 * steel[k + 1] * e_d * k_d + steel[k + 2] * k_d**2)
+
+
 if CELL == "triangle":
     # DSG3: the covariant shear strain along an edge of vector a (corner k to
     # node i) is the shear gap grad(w).a + (theta(m) x n).a with theta at the
@@ -123,7 +150,8 @@ dx_shear = ufl.dx(metadata={"quadrature_degree": shear_degree})
 
 psi_full = 0.5 * h * inner(plane_stress(eps), eps) \
     + 0.5 * h**3 / 12 * inner(plane_stress(kappa), kappa) \
-    + 0.5 * c_drill * G * h * (dot(theta, n) - omega)**2
+    + 0.5 * c_drill * G * h * (dot(theta, n) - omega)**2 \
+    + steel_energy(d1, 0) + steel_energy(d2, 3)
 psi_shear = 0.5 * k_shear * G * h * dot(gam, gam)
 
 Pi = eta * psi_full * dx_full + eta * psi_shear * dx_shear
@@ -132,9 +160,14 @@ Pi = eta * psi_full * dx_full + eta * psi_shear * dx_shear
 F = derivative(Pi, U, v)
 a = derivative(F, U, du)
 
-# Row sums of the consistent mass: lumped mass with rotary inertia rho h^3/12.
+# Row sums of the consistent mass: lumped mass with rotary inertia rho h^3/12,
+# plus the bars' (their first moment, a coupling of translations and
+# rotations, has no row sum and is left out, as usual with lumped masses).
 vu, vt = parts(v)
-m_lumped = (rho * h * (vu[0] + vu[1] + vu[2])
-            + rho * h**3 / 12 * (vt[0] + vt[1] + vt[2])) * dx_full
+m_lumped = ((rho * h + steel[6]) * (vu[0] + vu[1] + vu[2])
+            + (rho * h**3 / 12 + steel[7]) * (vt[0] + vt[1] + vt[2])) * dx_full
 
-forms = [a, F, m_lumped]
+# Tributary mid-surface area of each node (on its first dof).
+measure = vu[0] * dx_full
+
+forms = [a, F, m_lumped, measure]

@@ -35,4 +35,7 @@ a = derivative(F, U, du)
 # Row sums of the consistent mass (lumped mass).
 m_lumped = rho * (v[0] + v[1] + v[2]) * dx
 
-forms = [a, F, m_lumped]
+# Tributary volume of each node (on its first dof).
+measure = v[0] * dx
+
+forms = [a, F, m_lumped, measure]

@@ -6,6 +6,8 @@
 #include "solid_tetrahedron.h"
 
 #include <algorithm>
+#include <numbers>
+#include <numeric>
 #include <cmath>
 #include <dolfinx/fem/Constant.h>
 #include <dolfinx/fem/Form.h>
@@ -55,6 +57,54 @@ void validate(const Material& m, bool shell)
   }
 }
 
+std::array<std::array<double, 3>, 2> section_sums(const Reinforcement& r)
+{
+  std::array<std::array<double, 3>, 2> sums{};
+  for (const BarLayer& l : r.layers)
+  {
+    const double a = std::numbers::pi * l.diameter * l.diameter / (4.0 * l.spacing);
+    auto& s = sums[l.direction == 0 ? 0 : 1];
+    s[0] += a;
+    s[1] += a * l.z;
+    s[2] += a * l.z * l.z;
+  }
+  return sums;
+}
+
+void validate(const Reinforcement& r, double thickness)
+{
+  auto fail = [](const std::string& what, double v, const std::string& allowed)
+  {
+    std::ostringstream s;
+    s << "reinforcement: " << what << " = " << v << ": must be " << allowed;
+    throw std::runtime_error(s.str());
+  };
+  if (!(r.youngs_modulus > 0.0) || !std::isfinite(r.youngs_modulus))
+    fail("steel Young's modulus E_s", r.youngs_modulus, "> 0 Pa");
+  if (!(r.density > 0.0) || !std::isfinite(r.density))
+    fail("steel density rho_s", r.density, "> 0 kg/m^3");
+  const auto& d = r.direction;
+  const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  if (!(len > 0.0) || !std::isfinite(len))
+    fail("length of the bar direction", len, "> 0 (a global vector whose projection is d1)");
+  for (std::size_t k = 0; k < r.layers.size(); ++k)
+  {
+    const BarLayer& l = r.layers[k];
+    const std::string name = "layer " + std::to_string(k) + " ";
+    if (l.direction != 0 && l.direction != 1)
+      fail(name + "direction", l.direction, "0 (along d1) or 1 (along d2)");
+    if (!(l.diameter > 0.0) || !std::isfinite(l.diameter))
+      fail(name + "bar diameter", l.diameter, "> 0 m");
+    if (!(l.spacing > l.diameter) || !std::isfinite(l.spacing))
+      fail(name + "spacing", l.spacing,
+           "> the bar diameter " + std::to_string(l.diameter) + " m (bars apart)");
+    if (!std::isfinite(l.z) || std::abs(l.z) + 0.5 * l.diameter > 0.5 * thickness)
+      fail(name + "height z", l.z,
+           "such that |z| + d/2 <= h/2 = " + std::to_string(0.5 * thickness)
+               + " m (the bars inside the shell's thickness)");
+  }
+}
+
 ForceMethod parse_force_method(const std::string& s)
 {
   if (s == "matmult")
@@ -72,6 +122,7 @@ struct FormSet
   ufcx_form* a;
   ufcx_form* F;
   ufcx_form* m;
+  ufcx_form* measure;
   ufcx_function_space* (*space)(const char*);
   bool shell;
 };
@@ -89,17 +140,17 @@ FormSet forms_for(const dolfinx::mesh::Mesh& mesh)
           "space); this mesh has geometric dimension "
           + std::to_string(gdim) + ". Give 3D coordinates (x, y, z) to the nodes.");
     if (ct == CellType::triangle)
-      return {form_shell_triangle_a, form_shell_triangle_F, form_shell_triangle_m_lumped,
+      return {form_shell_triangle_a, form_shell_triangle_F, form_shell_triangle_m_lumped, form_shell_triangle_measure,
               functionspace_form_shell_triangle_F, true};
     return {form_shell_quadrilateral_a, form_shell_quadrilateral_F,
-            form_shell_quadrilateral_m_lumped, functionspace_form_shell_quadrilateral_F, true};
+            form_shell_quadrilateral_m_lumped, form_shell_quadrilateral_measure, functionspace_form_shell_quadrilateral_F, true};
   }
   if (ct == CellType::tetrahedron)
     return {form_solid_tetrahedron_a, form_solid_tetrahedron_F,
-            form_solid_tetrahedron_m_lumped, functionspace_form_solid_tetrahedron_F, false};
+            form_solid_tetrahedron_m_lumped, form_solid_tetrahedron_measure, functionspace_form_solid_tetrahedron_F, false};
   if (ct == CellType::hexahedron)
     return {form_solid_hexahedron_a, form_solid_hexahedron_F,
-            form_solid_hexahedron_m_lumped, functionspace_form_solid_hexahedron_F, false};
+            form_solid_hexahedron_m_lumped, form_solid_hexahedron_measure, functionspace_form_solid_hexahedron_F, false};
   throw std::runtime_error("unsupported cell type: shells take triangles or "
                            "quadrilaterals, solids tetrahedra or hexahedra");
 }
@@ -183,9 +234,9 @@ struct FEModel::Impl
   int bs = 6;
   std::shared_ptr<dolfinx::mesh::Mesh> mesh;
   std::shared_ptr<FunctionSpace> V, W;
-  std::shared_ptr<Function<double>> eta, U;
+  std::shared_ptr<Function<double>> eta, U, steel;
   std::map<std::string, std::shared_ptr<const Constant<double>>> constants;
-  std::shared_ptr<Form<double>> a, F, m;
+  std::shared_ptr<Form<double>> a, F, m, measure;
   std::unique_ptr<InternalForce> force;
   std::vector<double> x;             // (nodes, 3)
   std::vector<std::int32_t> cells;   // (cells, npc)
@@ -225,12 +276,25 @@ FEModel::FEModel(std::shared_ptr<dolfinx::mesh::Mesh> mesh, const Material& mate
     I.constants["k_shear"] = constant(material.shear_factor);
     I.constants["c_drill"] = constant(material.drilling);
   }
-  I.a = std::make_shared<Form<double>>(dolfinx::fem::create_form<double>(
-      *fs.a, {I.V, I.V}, {{"eta", I.eta}}, I.constants, {}));
-  I.F = std::make_shared<Form<double>>(dolfinx::fem::create_form<double>(
-      *fs.F, {I.V}, {{"eta", I.eta}, {"U", I.U}}, I.constants, {}));
+  std::map<std::string, std::shared_ptr<const Function<double>>> a_coeffs{{"eta", I.eta}},
+      F_coeffs{{"eta", I.eta}, {"U", I.U}}, m_coeffs;
+  if (fs.shell)
+  {
+    // the smeared reinforcement, zero (plain concrete) until set
+    I.steel = std::make_shared<Function<double>>(std::make_shared<FunctionSpace>(
+        dolfinx::fem::create_functionspace(fs.space, "steel", mesh)));
+    a_coeffs["steel"] = F_coeffs["steel"] = m_coeffs["steel"] = I.steel;
+  }
+  I.a = std::make_shared<Form<double>>(
+      dolfinx::fem::create_form<double>(*fs.a, {I.V, I.V}, a_coeffs, I.constants, {}));
+  I.F = std::make_shared<Form<double>>(
+      dolfinx::fem::create_form<double>(*fs.F, {I.V}, F_coeffs, I.constants, {}));
   I.m = std::make_shared<Form<double>>(
-      dolfinx::fem::create_form<double>(*fs.m, {I.V}, {}, I.constants, {}));
+      dolfinx::fem::create_form<double>(*fs.m, {I.V}, m_coeffs, I.constants, {}));
+  I.measure = std::make_shared<Form<double>>(
+      dolfinx::fem::create_form<double>(
+          *fs.measure, {I.V}, std::map<std::string, std::shared_ptr<const Function<double>>>{},
+          std::map<std::string, std::shared_ptr<const Constant<double>>>{}, {}));
 
   // Nodes, cells, node -> weight-space map.
   const auto dm = I.V->dofmap();
@@ -351,12 +415,11 @@ std::vector<double> FEModel::lumped_mass() const
 
 std::vector<double> FEModel::nodal_measure() const
 {
-  const auto m = lumped_mass();
-  const double per = _impl->shell ? _impl->mat.density * _impl->mat.thickness
-                                  : _impl->mat.density;
+  std::vector<double> m(num_dofs(), 0.0);
+  dolfinx::fem::assemble_vector(std::span<double>(m), *_impl->measure);
   std::vector<double> a(num_nodes());
   for (std::size_t i = 0; i < a.size(); ++i)
-    a[i] = m[i * _impl->bs] / per;
+    a[i] = m[i * _impl->bs];
   return a;
 }
 
@@ -379,6 +442,61 @@ void FEModel::set_weight(std::span<const double> eta)
 }
 
 std::span<const double> FEModel::weight() const { return _impl->weight; }
+
+void FEModel::set_reinforcement(const Reinforcement& r, std::span<const std::int32_t> cells)
+{
+  auto& I = *_impl;
+  if (!I.shell)
+    throw std::runtime_error("reinforcement: only shell models take a layered section");
+  validate(r, I.mat.thickness);
+  std::vector<std::int32_t> all;
+  if (cells.empty())
+  {
+    all.resize(num_cells());
+    std::iota(all.begin(), all.end(), 0);
+    cells = all;
+  }
+  const auto sums = section_sums(r);
+  const double de = r.youngs_modulus - I.mat.youngs_modulus;
+  const double dr = r.density - I.mat.density;
+  std::array<double, 11> values{
+      de * sums[0][0], de * sums[0][1], de * sums[0][2], de * sums[1][0], de * sums[1][1],
+      de * sums[1][2], dr * (sums[0][0] + sums[1][0]), dr * (sums[0][2] + sums[1][2]),
+      0.0, 0.0, 0.0};
+  const auto& dofs = I.steel->function_space()->dofmap()->list();
+  const int bs = I.steel->function_space()->dofmap()->bs();
+  auto x = I.steel->x()->mutable_array();
+  const double len = std::sqrt(r.direction[0] * r.direction[0] + r.direction[1] * r.direction[1]
+                               + r.direction[2] * r.direction[2]);
+  for (int k = 0; k < 3; ++k)
+    values[8 + k] = r.layers.empty() ? 0.0 : r.direction[k] / len;
+  for (std::int32_t c : cells)
+  {
+    if (c < 0 || static_cast<std::size_t>(c) >= num_cells())
+      throw std::runtime_error("reinforcement: cell " + std::to_string(c) + " out of range (the mesh has "
+                               + std::to_string(num_cells()) + " cells)");
+    // the cell's normal, as the form builds it (first two edges from vertex 0)
+    const std::int32_t* v = &I.cells[c * I.npc];
+    std::array<double, 3> e1, e2;
+    for (int i = 0; i < 3; ++i)
+    {
+      e1[i] = I.x[3 * v[1] + i] - I.x[3 * v[0] + i];
+      e2[i] = I.x[3 * v[2] + i] - I.x[3 * v[0] + i];
+    }
+    std::array<double, 3> n{e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                            e1[0] * e2[1] - e1[1] * e2[0]};
+    const double nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    const double dn = (n[0] * r.direction[0] + n[1] * r.direction[1] + n[2] * r.direction[2]) / (nl * len);
+    if (!(std::abs(dn) < 0.999))
+      throw std::runtime_error("reinforcement: the bar direction is (nearly) normal to cell "
+                               + std::to_string(c) + ": its projection on the cell's plane "
+                                                     "fixes d1, give a vector along the shell");
+    const std::int32_t dof = dofs.links(c)[0];
+    for (int k = 0; k < 11; ++k)
+      x[dof * bs + k] = values[k];
+  }
+  I.force->update();
+}
 
 void FEModel::internal_force(std::span<const double> u, std::span<double> f) const
 {

@@ -46,6 +46,39 @@ struct Material
 /// Throws std::runtime_error naming the value and the allowed range.
 void validate(const Material& m, bool shell);
 
+/// One layer of bars of a reinforced-concrete shell section, smeared over the
+/// width (the bars' area per unit width is pi d^2 / (4 s)).
+struct BarLayer
+{
+  int direction = 0;     ///< 0: the bars run along d1, 1: along d2 = n x d1
+  double diameter = 0.0; ///< bar diameter d [m], > 0
+  double spacing = 0.0;  ///< centre-to-centre spacing s [m], > d (bars apart)
+  double z = 0.0;        ///< height of the bars' axes above the mid-surface, along the cell normal [m]
+};
+
+/// The steel of a reinforced-concrete shell section: bars elastic, uniaxial
+/// along their direction, taking the place of concrete (transformed section,
+/// E_s - E). The section's membrane, coupling and bending stiffnesses along a
+/// bar direction gain (E_s - E) (A, S, I), the sums of a, a z and a z^2 over
+/// the layers of that direction (shell/forms/shell.py).
+struct Reinforcement
+{
+  double youngs_modulus = 200e9;                  ///< E_s [Pa], > 0
+  double density = 7850.0;                        ///< rho_s [kg/m^3], > 0
+  std::array<double, 3> direction{1.0, 0.0, 0.0}; ///< global vector; d1 is its projection on each cell
+  std::vector<BarLayer> layers;
+};
+
+/// The sums (A, S, I) = sum of (a, a z, a z^2) over the layers of each
+/// direction [m^2/m, m^3/m, m^4/m]: index 0 for d1, 1 for d2.
+std::array<std::array<double, 3>, 2> section_sums(const Reinforcement& r);
+
+/// Throws std::runtime_error naming the layer, the value and what is allowed:
+/// E_s, rho_s <= 0, a zero direction, a direction index other than 0 or 1, a
+/// diameter <= 0, a spacing <= the diameter (bars overlapping), a layer whose
+/// bars reach outside the thickness h (|z| + d/2 > h/2).
+void validate(const Reinforcement& r, double thickness);
+
 /// How internal forces are computed.
 enum class ForceMethod
 {
@@ -102,6 +135,14 @@ public:
 
   /// Lumped mass per dof [kg, kg m^2 for rotations: rho h^3/12 per area].
   std::vector<double> lumped_mass() const;
+
+  /// Shells: gives the listed cells (every cell if none is listed) the
+  /// reinforced section r, replacing what they had (an r without layers
+  /// makes them plain again); reassembles the stiffness. The lumped mass
+  /// (lumped_mass()) includes the bars' from then on.
+  /// @throws std::runtime_error for solids, a bad r (validate), a cell out of
+  ///   range, or a direction normal to one of the cells.
+  void set_reinforcement(const Reinforcement& r, std::span<const std::int32_t> cells = {});
 
   /// Energy weight eta at the nodes (P1, in [0, 1]); default 1. Setting it
   /// updates the internal forces (reassembles K for `matmult`).
