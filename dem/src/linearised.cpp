@@ -2,6 +2,7 @@
 // critical time step bounded from it.
 #include "force_loop.h"
 
+#include "dembridge/dem/bars.h"
 #include "dembridge/dem/body.h"
 
 #include <algorithm>
@@ -103,12 +104,14 @@ double critical_time_step(const Particles& p, const Links& l)
   return step_from_rows(rt, rr);
 }
 
-double critical_time_step(const Particles& p, const Links& l, const Material& m)
+namespace
 {
-  // and one contact with a rigid body per sphere (of infinite mass: the
-  // body's rows are left out), K_n = body_contact_stiffness, K_s = cs K_n,
-  // its shear acting at the arm r from the centre
-  std::vector<double> rt, rr;
+// one contact with a rigid body per sphere (of infinite mass: the body's
+// rows are left out), K_n = body_contact_stiffness, K_s = cs K_n, its shear
+// acting at the arm r from the centre
+void body_rows(const Particles& p, const Links& l, const Material& m, std::vector<double>& rt,
+               std::vector<double>& rr)
+{
   link_rows(p, l, rt, rr);
   const double cs = impl::contact_factors(m).cs;
   for (std::size_t i = 0; i < p.size(); ++i)
@@ -118,7 +121,24 @@ double critical_time_step(const Particles& p, const Links& l, const Material& m)
     rt[i] += std::max(kn, ks) / mi + ks * r / std::sqrt(mi * Ii);
     rr[i] += ks * r * r / Ii + ks * r / std::sqrt(Ii * mi);
   }
+}
+} // namespace
+
+double critical_time_step(const Particles& p, const Links& l, const Material& m)
+{
+  std::vector<double> rt, rr;
+  body_rows(p, l, m, rt, rr);
   return step_from_rows(rt, rr);
+}
+
+double critical_time_step(const Particles& p, const Links& l, const Material& m, const Bars& bars)
+{
+  std::vector<double> rt, rr, nodes;
+  body_rows(p, l, m, rt, rr);
+  add_bar_rows(bars, p, rt, nodes);
+  const double spheres = step_from_rows(rt, rr);
+  const double lmax = nodes.empty() ? 0.0 : *std::max_element(nodes.begin(), nodes.end());
+  return lmax > 0.0 ? std::min(spheres, 2.0 / std::sqrt(lmax)) : spheres;
 }
 
 } // namespace dembridge::dem

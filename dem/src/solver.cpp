@@ -173,13 +173,15 @@ void DemSolver::start()
   _nl.update(_p.x, _p.r, _l, _removed);
   compute_forces(_p, _l, _nl, _mat, 0.0, _counters, *_scratch);
   contact_bodies(0.0);
+  if (_has_bars)
+    bar_forces(_bars, _p, false);
   if (!_forces.empty())
     external(_forces, _t, _fext);
   _e = DemEnergy{};
   for (auto& c : _contacts)
     c.friction_work = 0.0;
   const DemEnergy e = energy();
-  _e.initial = e.kinetic + e.elastic + e.body_kinetic + e.body_contact;
+  _e.initial = e.kinetic + e.elastic + e.body_kinetic + e.body_contact + e.bar_kinetic + e.bar_elastic;
   _started = true;
 }
 
@@ -290,8 +292,12 @@ void DemSolver::begin_step()
     _fold[q] = _p.f[d] + (_fext.empty() ? 0.0 : _fext[d]);
     _vold[q] = _p.v[d];
   }
+  for (std::size_t q = 0; q < _bar_moved.size(); ++q)
+    for (int k = 0; k < 3; ++k)
+      _bar_fold[3 * q + k] = _bars.f[3 * _bar_moved[q] + k];
   kick(0.5 * dt);
   kick_bodies(0.5 * dt);
+  kick_bars(0.5 * dt);
   tie_plates();
   for (const auto& m : _motions)
   {
@@ -405,6 +411,15 @@ void DemSolver::check_finite() const
           << _steps << "): the run is unstable; reduce the time step";
         throw std::runtime_error(s.str());
       }
+  for (std::size_t q = 0; q < _bars.nodes(); ++q)
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(_bars.x[3 * q + k]) || !std::isfinite(_bars.v[3 * q + k]))
+      {
+        std::ostringstream s;
+        s << "non-finite position or velocity of bar node " << q << " at t = " << _t << " s (step " << _steps
+          << "): the run is unstable; reduce the time step";
+        throw std::runtime_error(s.str());
+      }
   if (std::isfinite(check))
     return;
   std::size_t bad = 0;
@@ -428,13 +443,14 @@ void DemSolver::end_step()
     external(_forces, t_new, _fext);
   const Drift moved = drift();
   drift_bodies();
+  const double w_damp_bars = drift_bars();
   // fragments leave here, between the drift and the forces: both halves of
   // a kick with a force between a leaving sphere and another then act on
   // both (the first, F(n), before; the second, F(n+1), not at all), so
   // momentum is kept exactly
   if (_domain_set)
     remove_escaped();
-  const double w_ext = moved.external_work, w_damp = moved.damping;
+  const double w_ext = moved.external_work, w_damp = moved.damping + w_damp_bars;
   const double t1 = omp_get_wtime();
   _nl.update(_p.x, _p.r, _l, _removed);
   const double t2 = omp_get_wtime();
@@ -442,12 +458,21 @@ void DemSolver::end_step()
   const double t25 = omp_get_wtime();
   contact_bodies(dt);
   const double t3 = omp_get_wtime();
+  if (_has_bars)
+  {
+    const BarWork bw = bar_forces(_bars, _p, true, _removed);
+    _e.bar_slip += bw.slip;
+    _e.bar_broken += bw.broken;
+  }
+  const double t4 = omp_get_wtime();
   _time.neighbours += t2 - t1;
   _time.forces += t25 - t2;
   _time.bodies += t3 - t25;
-  const double w_presc = held_reactions();
+  _time.bars += t4 - t3;
+  const double w_presc = held_reactions() + bar_reactions();
   kick(0.5 * dt);
   kick_bodies(0.5 * dt);
+  kick_bars(0.5 * dt);
   tie_plates();
   for (const auto& m : _motions)
     if (m.kind == MotionKind::velocity && !m.hinged())
@@ -534,6 +559,10 @@ DemEnergy DemSolver::energy() const
     e.body_contact += body_contact_energy(_p, _bodies[k], _contacts[k], _mat);
     e.body_friction += _contacts[k].friction_work;
   }
+  const BarEnergy be = bar_energy(_bars, _p);
+  e.bar_kinetic = be.kinetic;
+  e.bar_elastic = be.elastic;
+  e.bar_plastic = be.plastic;
   return e;
 }
 

@@ -108,7 +108,7 @@ constexpr std::array booked_energies{
     &DemEnergy::initial,         &DemEnergy::kinetic,      &DemEnergy::elastic,      &DemEnergy::softening,
     &DemEnergy::breakage,        &DemEnergy::friction,     &DemEnergy::damping,      &DemEnergy::external_work,
     &DemEnergy::prescribed_work, &DemEnergy::body_kinetic, &DemEnergy::body_contact, &DemEnergy::body_friction,
-    &DemEnergy::removed};
+    &DemEnergy::removed,         &DemEnergy::bar_slip,     &DemEnergy::bar_broken};
 
 // ---- NeighbourList --------------------------------------------------------------
 
@@ -247,6 +247,7 @@ void DemSolver::save(const Group& g) const
     }
   g.write("hinged", hinged);
   save_bodies(g.group("bodies"));
+  save_bars(g.group("bars"));
   g.write("removed", _removed);
   g.write("removed_totals", std::vector<double>{double(_gone.count), _gone.mass, _gone.momentum[0], _gone.momentum[1],
                                                 _gone.momentum[2], _gone.kinetic, _gone.elastic});
@@ -306,6 +307,7 @@ void DemSolver::load(const Group& g)
       _motion_vprev[q][k] = hinged[6 * q + 2 * k + 1];
     }
   load_bodies(g.group("bodies"));
+  load_bars(g.group("bars"));
 
   // the force loop's index structures are rebuilt for the loaded pairs
   _scratch = std::make_unique<ForceScratch>();

@@ -21,7 +21,7 @@ namespace dembridge::checkpoint
 {
 
 /// The version of the file layout this build writes and reads.
-constexpr std::int64_t format_version = 4;
+constexpr std::int64_t format_version = 5;
 
 /// A group of a checkpoint being written (arrays are created) or read
 /// (arrays are read back). Errors name the file and the array's path.

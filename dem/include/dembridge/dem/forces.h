@@ -13,6 +13,7 @@
 
 namespace dembridge::dem
 {
+struct Bars;
 
 /// Energy dissipated or stored in the force loop since the start [J].
 struct ForceCounters
@@ -75,5 +76,8 @@ double critical_time_step(const Particles& p, const Links& l);
 /// links (body.h: body_contact_stiffness): the step for a run with bodies.
 /// A sphere with no intact link but the body contact still counts.
 double critical_time_step(const Particles& p, const Links& l, const Material& m);
+/// The same with the bars' elements and bonds (bars.h: add_bar_rows): the
+/// step for a reinforced run, the bar nodes' rows included.
+double critical_time_step(const Particles& p, const Links& l, const Material& m, const Bars& bars);
 
 } // namespace dembridge::dem

@@ -6,6 +6,7 @@
 /// step is in forces.h.
 
 #include "dembridge/dem/assembly.h"
+#include "dembridge/dem/bars.h"
 #include "dembridge/dem/body.h"
 #include "dembridge/dem/conditions.h"
 #include "dembridge/dem/forces.h"
@@ -16,6 +17,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,7 +28,8 @@ namespace dembridge::dem
 struct ForceScratch;
 
 /// Energy budget [J]: kinetic + elastic + softening + compaction + breakage + friction +
-/// damping + the rigid bodies' kinetic, contact and friction energies =
+/// damping + the rigid bodies' kinetic, contact and friction energies + the
+/// bars' kinetic, elastic, plastic, bond slip and broken energies =
 /// initial + external_work + prescribed_work.
 struct DemEnergy
 {
@@ -39,10 +42,16 @@ struct DemEnergy
   /// Carried away by the spheres that left the domain: their kinetic
   /// energy and the elastic energy of their links and contacts then.
   double removed = 0.0;
+  double bar_kinetic = 0.0; ///< the bar nodes' kinetic energy
+  double bar_elastic = 0.0; ///< the bars' steel and bonds (bars.h: BarEnergy)
+  double bar_plastic = 0.0; ///< the steel's plastic work (a state)
+  double bar_slip = 0.0;    ///< dissipated by the bonds' slip beyond their envelope
+  double bar_broken = 0.0;  ///< released by bar elements that broke and bonds that opened
   double imbalance() const
   {
     return kinetic + elastic + softening + compaction + breakage + friction + damping + body_kinetic
-           + body_contact + body_friction + removed - initial - external_work - prescribed_work;
+           + body_contact + body_friction + removed + bar_kinetic + bar_elastic + bar_plastic + bar_slip
+           + bar_broken - initial - external_work - prescribed_work;
   }
 };
 
@@ -61,6 +70,7 @@ struct DemTimings
 {
   double forces = 0.0;      ///< compute_forces: links and sphere contacts (one sweep)
   double bodies = 0.0;      ///< the rigid bodies' contacts
+  double bars = 0.0;        ///< the bars' elements and bonds
   double neighbours = 0.0;  ///< neighbour-list checks and rebuilds
   double integration = 0.0; ///< kicks, drift, conditions, reactions, checks
 };
@@ -101,6 +111,20 @@ public:
   const Removed& removed() const { return _gone; }
   /// 1 for each sphere removed from the computation.
   const std::vector<std::uint8_t>& removed_flags() const { return _removed; }
+  /// Adds the reinforcing bars with their bonds (bars.h; before start(),
+  /// once): their nodes move with the spheres' step (damped like them), their
+  /// forces join the spheres', their energies the budget. Bonds whose sphere
+  /// leaves the domain open. @throws std::runtime_error after start() or on
+  /// a second call.
+  void add_bars(Bars bars);
+  const Bars& bars() const { return _bars; }
+  /// From the next step on, the listed bar nodes move at a constant velocity
+  /// [m/s] (a bar pulled at its end; zero holds them). Returns the group's
+  /// index for bar_reaction(). @throws naming a node out of range or moved
+  /// already.
+  std::size_t move_bar_nodes(std::span<const std::int32_t> nodes, const std::array<double, 3>& velocity);
+  /// The force that keeps the velocity of the nodes of group `g` [N].
+  std::array<double, 3> bar_reaction(std::size_t g) const { return _bar_reac.at(g); }
   const RigidBody& body(std::size_t k) const { return _bodies.at(k); }
   const BodyContacts& body_contacts(std::size_t k) const { return _contacts.at(k); }
   /// Computes the initial forces and energy (call after the conditions).
@@ -197,6 +221,17 @@ private:
   void load_bodies(const checkpoint::Group& g);
   void drift_bodies();
   void contact_bodies(double dt);
+  Bars _bars;
+  bool _has_bars = false;
+  std::vector<std::int32_t> _bar_moved; // nodes with a prescribed velocity
+  std::vector<std::int32_t> _bar_group; // the group of each (move_bar_nodes' call)
+  std::vector<double> _bar_fold;        // their force at the step's start (3 per node)
+  std::vector<std::array<double, 3>> _bar_reac; // per group
+  void kick_bars(double h);
+  double drift_bars(); // returns the damping's work
+  double bar_reactions(); // the moved nodes' reaction; returns its work
+  void save_bars(const checkpoint::Group& g) const;
+  void load_bars(const checkpoint::Group& g);
   double _dt, _c, _t = 0.0;
   std::int64_t _steps = 0;
   double _guard_margin = 0.5;

@@ -1,0 +1,179 @@
+#pragma once
+/// @file bars.h
+/// Reinforcing bars in the DE zone (docs/method.md section 1.15): each bar a
+/// chain of two-node axial elements (trusses) of elastic-plastic steel, its
+/// nodes moved by the spheres' velocity Verlet step, and tied to the
+/// surrounding spheres by bonds: a bond stress-slip law along the bar (fib
+/// Model Code 2010, pull-out) and a radial spring that opens in tension.
+/// Structure of arrays; the laws are pure functions.
+
+#include "dembridge/dem/assembly.h"
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace dembridge::dem
+{
+
+/// Bar steel: elastic, then plastic with linear isotropic hardening, broken
+/// at a rupture strain (SI units).
+struct Steel
+{
+  double youngs_modulus = 200e9; ///< E_s [Pa], > 0
+  double density = 7850.0;       ///< [kg/m^3], > 0
+  double yield = 500e6;          ///< f_y [Pa], > 0
+  double hardening = 1e9;        ///< H = d sigma / d (plastic strain) [Pa], >= 0
+  double rupture_strain = 0.08;  ///< eps_u: a bar element breaks when its strain reaches it [-], > f_y / E_s
+  /// @throws std::runtime_error naming the value and its allowed range.
+  void validate() const;
+};
+
+/// The bond between a bar and the concrete around it.
+/// Along the bar, the bond stress follows the fib Model Code 2010 envelope of
+/// the slip s (pull-out failure):
+///   tau = K0 s                                  s <= s0 (linear start)
+///   tau = tau_max (s / s1)^alpha                s0 < s <= s1
+///   tau = tau_max                               s1 < s <= s2
+///   tau = tau_max - (tau_max - tau_f)(s - s2) / (s3 - s2)   s2 < s <= s3
+///   tau = tau_f = tau_f_ratio tau_max           s > s3
+/// with K0 = tau_max (s0 / s1)^alpha / s0 (the power law's slope is infinite
+/// at s = 0). Unloading and reloading follow K0 (bond_shear).
+/// Across it, a radial spring of stiffness k_r per unit bar surface: linear
+/// in compression; in tension it opens (the bond is lost, along the bar
+/// too) when its stress reaches `opening`.
+struct BondLaw
+{
+  double tau_max = 13.7e6;   ///< [Pa] (fib: 2.5 sqrt(f_cm[MPa]), good bond)
+  double s0 = 0.01e-3;       ///< end of the linear start [m], in (0, s1)
+  double s1 = 1e-3;          ///< [m]
+  double s2 = 2e-3;          ///< [m], >= s1
+  double s3 = 10e-3;         ///< [m] (fib: the clear rib spacing), > s2
+  double alpha = 0.4;        ///< [-], in (0, 1]
+  double tau_f_ratio = 0.4;  ///< tau_f / tau_max [-], in [0, 1]
+  double radial_stiffness = 1e13; ///< k_r [Pa/m], > 0
+  double opening = 3e6;      ///< radial tensile stress that opens the bond [Pa], > 0
+  /// @throws std::runtime_error naming the value and its allowed range.
+  void validate() const;
+  double k0() const; ///< K0 [Pa/m]
+};
+
+/// The envelope tau(|s|) of the bond law, >= 0 [Pa].
+double bond_envelope(double slip, const BondLaw& b);
+
+/// State of a steel element after a strain update.
+struct SteelState
+{
+  double stress = 0.0;  ///< [Pa] (tension > 0)
+  double plastic = 0.0; ///< plastic strain eps_p [-]
+  double alpha = 0.0;   ///< accumulated plastic strain [-]
+  bool broken = false;  ///< the strain reached the rupture strain
+};
+/// Return mapping of the steel law at total strain eps from the plastic
+/// strain eps_p and accumulated plastic strain alpha of the last step:
+/// sigma = E (eps - eps_p), |sigma| <= f_y + H alpha.
+SteelState steel_update(double strain, double plastic, double alpha, const Steel& s);
+/// Plastic work per unit volume, f_y alpha + H alpha^2 / 2 [J/m^3] (a state
+/// of alpha: the return mapping's sigma d eps_p = (f_y + H alpha) d alpha).
+double steel_plastic_work(double alpha, const Steel& s);
+
+/// Bond stress after a slip increment: the trial tau + K0 (s - s_old),
+/// capped at +-envelope(largest |s| so far, this step's included). Returns
+/// {tau, largest |s|, energy dissipated per unit area: the mean stress's
+/// work less the elastic gain, (tau_old + tau) (s - s_old) / 2 - (tau^2 -
+/// tau_old^2) / (2 K0)}.
+std::array<double, 3> bond_shear(double tau_old, double slip_old, double slip, double slip_max,
+                                 const BondLaw& b);
+
+/// A bar as given: a polyline, its diameter and its laws.
+struct BarLine
+{
+  std::vector<std::array<double, 3>> points; ///< >= 2 points [m]
+  double diameter = 0.0;                     ///< [m], > 0
+  std::uint8_t steel = 0;                    ///< index into Bars::steels
+  std::uint8_t bond = 0;                     ///< index into Bars::bond_laws
+};
+
+/// Bars and their bonds, as structure of arrays.
+struct Bars
+{
+  std::vector<Steel> steels;      ///< table of steels
+  std::vector<BondLaw> bond_laws; ///< table of bond laws
+  // nodes: (n, 3) row-major
+  std::vector<double> x, x0, v, f, m;
+  std::vector<std::uint8_t> held; ///< 1: the node keeps its velocity (a prescribed motion)
+  // elements
+  std::vector<std::int32_t> a, b, line;   ///< end nodes; the polyline it belongs to
+  std::vector<double> area, l0;           ///< cross-section [m^2], rest length [m]
+  std::vector<double> plastic, alpha;     ///< eps_p, accumulated plastic strain
+  std::vector<double> force, length;      ///< axial force [N] and length [m] at the last step
+  std::vector<std::uint8_t> steel, bond_law, broken; ///< indices into the tables; 1 once broken
+  // bonds: sphere to a material point of an element
+  std::vector<std::int32_t> sphere, element;
+  std::vector<double> xi;                 ///< the point's place along the element, in [0, 1]
+  std::vector<double> surface;            ///< bar surface the bond carries, pi d l [m^2]
+  std::vector<double> axial0, radial0;    ///< the sphere's axial and radial offsets at creation [m]
+  std::vector<double> tau, slip, slip_max; ///< bond stress [Pa], slip [m] (sphere along the bar), largest |slip|
+  std::vector<double> gap;                 ///< radial opening [m] (> 0 apart) at the last step
+  std::vector<std::uint8_t> open;          ///< 1: the bond opened (no force any more)
+  std::size_t nodes() const { return m.size(); }
+  std::size_t elements() const { return a.size(); }
+  std::size_t bonds() const { return sphere.size(); }
+};
+
+/// Lays out the bars: each polyline cut into elements no longer than
+/// `element_length`, nodes with lumped masses (rho A l / 2 per element end).
+/// @throws std::runtime_error naming the bar: fewer than 2 points, a zero
+///   segment, a diameter <= 0, an unknown steel or bond index, bad laws,
+///   element_length <= 0; and two bars closer than the sum of their radii.
+Bars make_bars(std::span<const BarLine> lines, std::vector<Steel> steels,
+               std::vector<BondLaw> bond_laws, double element_length);
+
+/// Distance from point x to the axis of element e (clamped to the segment),
+/// and the place of the nearest point, xi in [0, 1].
+std::array<double, 2> distance_to_element(const Bars& bars, std::size_t e, const double* x);
+
+/// 1 for each sphere (centre c, radius r) that overlaps a bar: closer to an
+/// axis than r + the bar's radius. A packing drops them to leave the bars
+/// room.
+std::vector<std::uint8_t> spheres_on_bars(const Bars& bars, std::span<const double> centres,
+                                          std::span<const double> radii);
+
+/// Bonds every sphere whose surface lies within `reach` of a bar's surface
+/// (centre closer to the axis than radius + bar radius + reach) to the
+/// nearest point of the nearest element. Each element's surface pi d l0 is
+/// shared equally among its bonds. Returns the number of bonds.
+std::size_t create_bonds(Bars& bars, const Particles& p, double reach);
+
+/// Energies of the bars [J].
+struct BarEnergy
+{
+  double kinetic = 0.0; ///< of the nodes
+  double elastic = 0.0; ///< steel sigma^2 / (2 E) A l0, bond tau^2 / (2 K0) and k_r g^2 / 2 per surface
+  double plastic = 0.0; ///< steel plastic work (a state of alpha)
+};
+BarEnergy bar_energy(const Bars& bars, const Particles& p);
+
+/// What one force call dissipated or released [J].
+struct BarWork
+{
+  double slip = 0.0;   ///< bond slip beyond the envelope
+  double broken = 0.0; ///< released by elements that broke and bonds that opened
+};
+
+/// Axial forces of the elements and the bonds' forces, from the positions:
+/// adds to bars.f (zeroed first) and p.f. With advance the histories move
+/// on (plastic strain, rupture, bond stress, opening); without, the forces
+/// of the current state are evaluated (start of a run). A bond whose sphere
+/// is flagged in `gone` (removed from the computation; may be empty) opens.
+BarWork bar_forces(Bars& bars, Particles& p, bool advance, std::span<const std::uint8_t> gone = {});
+
+/// Adds the bars' Gershgorin rows (of M^-1/2 K M^-1/2, [1/s^2]) to the
+/// spheres' translation rows (their bonds) and fills the nodes' (elements
+/// and bonds): critical_time_step(p, l, m, bars) takes 2 / sqrt(largest).
+void add_bar_rows(const Bars& bars, const Particles& p, std::vector<double>& sphere_rows,
+                  std::vector<double>& node_rows);
+
+} // namespace dembridge::dem

@@ -1,0 +1,371 @@
+// Reinforcing bars in the DEM (bars.h): the steel law and the bond law
+// against their closed forms, a bar pulled to rupture in the solver, the
+// discretisation's independence, the bond's kinematics (rigid motions,
+// momentum, moment, energy), bad input, restart.
+#include "dembridge/dem/bars.h"
+#include "dembridge/dem/solver.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <unistd.h>
+
+using namespace dembridge::dem;
+using Catch::Contains;
+using Catch::Matchers::WithinAbs;
+using Catch::Matchers::WithinRel;
+
+namespace
+{
+constexpr double pi = std::numbers::pi;
+
+Steel b500()
+{
+  Steel s;
+  s.yield = 500e6;
+  s.hardening = 2e9;
+  s.rupture_strain = 0.05;
+  return s;
+}
+
+/// Monotonic tension of linear isotropic hardening: sigma = E (eps -
+/// alpha), sigma = f_y + H alpha, so sigma = E (f_y + H eps) / (E + H).
+double tension_stress(double eps, const Steel& s)
+{
+  if (eps <= s.yield / s.youngs_modulus)
+    return s.youngs_modulus * eps;
+  return s.youngs_modulus * (s.yield + s.hardening * eps) / (s.youngs_modulus + s.hardening);
+}
+
+/// Two linked spheres far from every bar: the solver's assembly when only
+/// the bars matter.
+struct Bystander
+{
+  Particles p = make_particles(std::vector<double>{1.0, 1.0, 1.0, 1.002, 1.0, 1.0},
+                               std::vector<double>{1e-3, 1e-3}, 2400.0, 1.0);
+  Material m;
+  Links l;
+  Bystander()
+  {
+    m.micro = {0.2, 1.0, 1.0};
+    l = create_links(p, 1.01, m);
+  }
+};
+
+/// A straight bar of length L along x from the origin, cut into n elements.
+Bars straight_bar(double L, int n, double d, const Steel& s)
+{
+  BarLine line{{{0, 0, 0}, {L, 0, 0}}, d, 0, 0};
+  return make_bars(std::span<const BarLine>(&line, 1), {s}, {BondLaw{}}, L / n * (1 + 1e-12));
+}
+
+/// Pulls `bars` at its last node at speed v along x, the first held, for
+/// the end displacements in `at` (increasing); returns the reactions there.
+std::vector<double> pull(Bars bars, double v, const std::vector<double>& at, DemEnergy* budget = nullptr)
+{
+  Bystander b;
+  const double dt = 0.5 * critical_time_step(b.p, b.l, b.m, bars);
+  // damping c = 2000 /s: the ring of the impulsive start (rho c v, 0.4 %
+  // of the yield stress at 0.05 m/s) decays within ~1 ms; its drag c m v
+  // on the moving nodes is 1e-8 of the forces
+  DemSolver s(b.p, b.l, b.m, dt, 2000.0, 1e-4);
+  const std::int32_t first = 0, last = static_cast<std::int32_t>(bars.nodes() - 1);
+  s.add_bars(std::move(bars));
+  s.move_bar_nodes(std::span<const std::int32_t>(&first, 1), {0, 0, 0});
+  const std::size_t end = s.move_bar_nodes(std::span<const std::int32_t>(&last, 1), {v, 0, 0});
+  s.start();
+  std::vector<double> f;
+  for (double u : at)
+  {
+    while ((s.steps() + 1) * dt * v <= u * (1 + 1e-12))
+      s.step();
+    f.push_back(s.bar_reaction(end)[0]);
+  }
+  if (budget)
+    *budget = s.energy();
+  return f;
+}
+} // namespace
+
+TEST_CASE("steel law: tension, unloading, reversed yield and rupture in closed form", "[bars]")
+{
+  const Steel s = b500();
+  const double ey = s.yield / s.youngs_modulus;
+  // one big increment and many small ones give the same (the return
+  // mapping of linear hardening is exact)
+  for (double eps : {0.5 * ey, 2 * ey, 0.01, 0.04})
+  {
+    const SteelState one = steel_update(eps, 0.0, 0.0, s);
+    CHECK_THAT(one.stress, WithinRel(tension_stress(eps, s), 1e-12));
+    SteelState st;
+    for (int k = 1; k <= 100; ++k)
+      st = steel_update(eps * k / 100, st.plastic, st.alpha, s);
+    CHECK_THAT(st.stress, WithinRel(tension_stress(eps, s), 1e-12));
+    CHECK_FALSE(st.broken);
+  }
+  // unloading from 1 % is elastic with E; reversed yield at -(f_y + H alpha)
+  const SteelState a = steel_update(0.01, 0.0, 0.0, s);
+  const double sig = a.stress;
+  const SteelState u = steel_update(0.01 - 0.5 * sig / s.youngs_modulus, a.plastic, a.alpha, s);
+  CHECK_THAT(u.stress, WithinRel(0.5 * sig, 1e-12));
+  CHECK(u.alpha == a.alpha);
+  const SteelState r = steel_update(0.01 - 3 * sig / s.youngs_modulus, a.plastic, a.alpha, s);
+  CHECK(r.stress < 0.0);
+  // |sigma| = f_y + H alpha after the reversed return
+  CHECK_THAT(-r.stress, WithinRel(s.yield + s.hardening * r.alpha, 1e-12));
+  // rupture at eps_u, not before
+  CHECK_FALSE(steel_update(0.0499, 0.0, 0.0, s).broken);
+  CHECK(steel_update(0.05, 0.0, 0.0, s).broken);
+  // plastic work f_y alpha + H alpha^2 / 2 = the integral of sigma d eps_p
+  double w = 0.0;
+  SteelState st;
+  for (int k = 1; k <= 20000; ++k)
+  {
+    const SteelState nx = steel_update(0.04 * k / 20000, st.plastic, st.alpha, s);
+    w += 0.5 * (st.stress + nx.stress) * (nx.plastic - st.plastic);
+    st = nx;
+  }
+  CHECK_THAT(steel_plastic_work(st.alpha, s), WithinRel(w, 1e-6)); // trapezoidal sum, 2e4 steps
+}
+
+TEST_CASE("bond law: the fib envelope, unloading with K0, dissipation", "[bars]")
+{
+  BondLaw b; // tau_max 13.7 MPa, s1 1 mm, s2 2 mm, s3 10 mm, alpha 0.4, tau_f 0.4 tau_max
+  const double tm = b.tau_max;
+  CHECK_THAT(bond_envelope(b.s0, b), WithinRel(tm * std::pow(b.s0 / b.s1, 0.4), 1e-12));
+  CHECK_THAT(bond_envelope(0.5 * b.s0, b), WithinRel(0.5 * tm * std::pow(b.s0 / b.s1, 0.4), 1e-12));
+  CHECK_THAT(bond_envelope(0.3e-3, b), WithinRel(tm * std::pow(0.3, 0.4), 1e-12));
+  CHECK_THAT(bond_envelope(1.5e-3, b), WithinRel(tm, 1e-12));
+  CHECK_THAT(bond_envelope(6e-3, b), WithinRel(tm - 0.6 * tm * 0.5, 1e-12));
+  CHECK_THAT(bond_envelope(-12e-3, b), WithinRel(0.4 * tm, 1e-12));
+  // monotonic slip in small steps follows the envelope (it rises slower
+  // than K0 past s0); each step dissipates >= 0
+  double tau = 0.0, s = 0.0, smax = 0.0, diss = 0.0;
+  for (int k = 1; k <= 4000; ++k)
+  {
+    const double sn = 8e-3 * k / 4000;
+    const auto out = bond_shear(tau, s, sn, smax, b);
+    CHECK(out[2] >= -1e-9 * tm * 1e-6);
+    tau = out[0];
+    s = sn;
+    smax = out[1];
+    diss += out[2];
+  }
+  CHECK_THAT(tau, WithinRel(bond_envelope(8e-3, b), 1e-12));
+  // unloading by 0.01 mm: elastic with K0 (K0 = 2.2e11 Pa/m)
+  const auto un = bond_shear(tau, s, s - 1e-5, smax, b);
+  CHECK_THAT(un[0], WithinRel(tau - b.k0() * 1e-5, 1e-12));
+  CHECK(un[2] == Approx(0.0).margin(1e-9));
+  // the dissipated energy = the work along the envelope less the elastic
+  // energy tau^2 / (2 K0) left (trapezoidal sums over 2 um steps)
+  double work = 0.0;
+  for (int k = 1; k <= 4000; ++k)
+    work += 0.5 * (bond_envelope(8e-3 * (k - 1) / 4000, b) + bond_envelope(8e-3 * k / 4000, b)) * 2e-6;
+  CHECK_THAT(diss, WithinRel(work - tau * tau / (2 * b.k0()), 2e-3));
+}
+
+TEST_CASE("a bar pulled to rupture: yield force, hardening and rupture against the law", "[bars]")
+{
+  // 5.69 mm bar (Hanchak's), 0.1 m in 10 elements, pulled at 0.05 m/s:
+  // the end force is A sigma(u / L) within 1 % (the impulsive start's ring,
+  // rho c v = 2 MPa, damped), and zero once an element reached eps_u
+  const Steel s = b500();
+  const double d = 5.69e-3, A = pi * d * d / 4, L = 0.1;
+  const std::vector<double> strains{0.5 * s.yield / s.youngs_modulus, 0.004, 0.02, 0.045, 0.051};
+  std::vector<double> at;
+  for (double e : strains)
+    at.push_back(e * L);
+  DemEnergy e;
+  const auto f = pull(straight_bar(L, 10, d, s), 0.05, at, &e);
+  for (std::size_t k = 0; k + 1 < strains.size(); ++k)
+  {
+    INFO("strain " << strains[k]);
+    CHECK_THAT(f[k], WithinRel(A * tension_stress(strains[k], s), 0.01));
+  }
+  CHECK(std::abs(f.back()) < 1e-3 * A * s.yield); // broken
+  CHECK(e.bar_broken > 0.0);
+  // the work of the pull = plastic work + what the rupture released + damping, to 1 %
+  INFO("prescribed " << e.prescribed_work << " J, plastic " << e.bar_plastic << " J, broken " << e.bar_broken
+                     << " J, damping " << e.damping << " J, imbalance " << e.imbalance());
+  CHECK(std::abs(e.imbalance()) < 0.01 * e.prescribed_work);
+}
+
+TEST_CASE("bar objectivity: the axial stiffness does not depend on the elements", "[bars]")
+{
+  // Elements in series have EA/L whatever their number: 1, 4 and 16
+  // elements give the same elastic force at the same end displacement, to
+  // 0.5 % (the bound is 2 %; the ring's remains are smaller)
+  const Steel s = b500();
+  const double d = 5.69e-3, A = pi * d * d / 4, L = 0.1, u = 0.001 * L;
+  for (int n : {1, 4, 16})
+  {
+    const auto f = pull(straight_bar(L, n, d, s), 0.01, {u});
+    INFO(n << " elements: " << f[0] << " N");
+    CHECK_THAT(f[0], WithinRel(s.youngs_modulus * A * u / L, 0.005));
+  }
+}
+
+TEST_CASE("bond kinematics: rigid motions, momentum, moment and energy", "[bars]")
+{
+  const Steel s = b500();
+  BarLine line{{{0, 0, 0}, {0.02, 0, 0}}, 0.006, 0, 0};
+  Bars bars = make_bars(std::span<const BarLine>(&line, 1), {s}, {BondLaw{}}, 0.02);
+  Particles p = make_particles(std::vector<double>{0.006, 0.006, 0.001}, std::vector<double>{0.003}, 2400.0, 1.0);
+  REQUIRE(create_bonds(bars, p, 0.001) == 1);
+  // a rigid rotation and translation of sphere and bar: no force
+  const double c = std::cos(0.4), sn = std::sin(0.4);
+  auto move = [&](double* x)
+  {
+    const double x0 = x[0], y0 = x[1];
+    x[0] = c * x0 - sn * y0 + 0.01;
+    x[1] = sn * x0 + c * y0 - 0.02;
+    x[2] += 0.003;
+  };
+  move(&p.x[0]);
+  move(&bars.x[0]);
+  move(&bars.x[3]);
+  std::fill(p.f.begin(), p.f.end(), 0.0);
+  bar_forces(bars, p, false);
+  for (int k = 0; k < 3; ++k)
+  {
+    CHECK(std::abs(p.f[k]) < 1e-6);
+    CHECK(std::abs(bars.f[k]) + std::abs(bars.f[3 + k]) < 1e-6);
+  }
+  // then a deformation (small: the bond stays in its linear start and
+  // closed), with the histories advanced from zero so that tau = K0 slip:
+  // the forces sum to zero and their moment is zero
+  p.x[0] += 2e-8;
+  p.x[1] += 1e-8;
+  p.x[2] -= 1.5e-8;
+  bars.x[3] += 0.5e-8;
+  auto forces = [&](const double* xs, std::vector<double>& fs, std::vector<double>& fn)
+  {
+    (void)xs;
+    Bars probe = bars;
+    Particles pp = p;
+    std::fill(pp.f.begin(), pp.f.end(), 0.0);
+    bar_forces(probe, pp, true);
+    fs = pp.f;
+    fn = probe.f;
+    return bar_energy(probe, pp).elastic;
+  };
+  std::vector<double> fs, fn;
+  forces(nullptr, fs, fn);
+  REQUIRE(bars.open[0] == 0);
+  double F[3] = {0, 0, 0}, M[3] = {0, 0, 0}, scale = 0.0;
+  auto add = [&](const double* x, const double* f)
+  {
+    for (int k = 0; k < 3; ++k)
+      F[k] += f[k];
+    M[0] += x[1] * f[2] - x[2] * f[1];
+    M[1] += x[2] * f[0] - x[0] * f[2];
+    M[2] += x[0] * f[1] - x[1] * f[0];
+    scale = std::max(scale, std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]));
+  };
+  add(&p.x[0], &fs[0]);
+  add(&bars.x[0], &fn[0]);
+  add(&bars.x[3], &fn[3]);
+  REQUIRE(scale > 0.0);
+  for (int k = 0; k < 3; ++k)
+  {
+    CHECK(std::abs(F[k]) < 1e-12 * scale);
+    CHECK(std::abs(M[k]) < 1e-12 * scale * 0.03);
+  }
+  // the forces are the energy's gradient: central differences of the
+  // elastic energy S (K0 slip^2 + k_r gap^2) / 2 in the sphere's and a
+  // node's position (the energy is quadratic near here: the difference is
+  // round-off, 1e-6 of the largest force)
+  for (int which = 0; which < 2; ++which)
+    for (int k = 0; k < 3; ++k)
+    {
+      double* x = which == 0 ? &p.x[0] : &bars.x[0];
+      const double expect = which == 0 ? fs[k] : fn[k];
+      const double x0 = x[k], h = 1e-10;
+      std::vector<double> a, b;
+      x[k] = x0 + h;
+      const double ep = forces(nullptr, a, b);
+      x[k] = x0 - h;
+      const double em = forces(nullptr, a, b);
+      x[k] = x0;
+      INFO((which == 0 ? "sphere" : "node") << " dof " << k);
+      CHECK_THAT(-(ep - em) / (2 * h), WithinAbs(expect, 1e-6 * scale));
+    }
+}
+
+TEST_CASE("bars: bad input is refused with the value named", "[bars][errors]")
+{
+  const Steel s = b500();
+  auto make = [&](std::vector<BarLine> lines, Steel st = b500(), BondLaw bl = BondLaw{}, double h = 0.01)
+  { return make_bars(lines, {st}, {bl}, h); };
+  BarLine ok{{{0, 0, 0}, {0.1, 0, 0}}, 0.006, 0, 0};
+  CHECK_THROWS_WITH(make({BarLine{{{0, 0, 0}}, 0.006, 0, 0}}), Contains("bar 0: 1 points given"));
+  CHECK_THROWS_WITH(make({BarLine{{{0, 0, 0}, {0.1, 0, 0}}, 0.0, 0, 0}}), Contains("bar 0 diameter = 0"));
+  CHECK_THROWS_WITH(make({ok, BarLine{{{0, 0.004, 0}, {0.1, 0.004, 0}}, 0.006, 0, 0}}),
+                    Contains("bars 0 and 1 overlap"));
+  CHECK_THROWS_WITH(make({BarLine{{{0, 0, 0}, {0, 0, 0}}, 0.006, 0, 0}}), Contains("segment 0 length = 0"));
+  CHECK_THROWS_WITH(make({BarLine{{{0, 0, 0}, {0.1, 0, 0}}, 0.006, 1, 0}}), Contains("steel index = 1"));
+  Steel bad = s;
+  bad.yield = 0.0;
+  CHECK_THROWS_WITH(make({ok}, bad), Contains("yield strength f_y = 0"));
+  bad = s;
+  bad.hardening = -1.0;
+  CHECK_THROWS_WITH(make({ok}, bad), Contains("hardening modulus H = -1"));
+  bad = s;
+  bad.rupture_strain = 0.001;
+  CHECK_THROWS_WITH(make({ok}, bad), Contains("rupture strain = 0.001"));
+  BondLaw bb;
+  bb.s3 = 1e-3;
+  CHECK_THROWS_WITH(make({ok}, s, bb), Contains("bond s3 = 0.001"));
+  CHECK_THROWS_WITH(make({ok}, s, BondLaw{}, 0.0), Contains("bar element length = 0"));
+  // crossing bars at right angles, 5 mm apart with 6 mm bars: overlap
+  CHECK_THROWS_WITH(make({ok, BarLine{{{0.05, -0.05, 0.005}, {0.05, 0.05, 0.005}}, 0.006, 0, 0}}),
+                    Contains("overlap"));
+  CHECK_NOTHROW(make({ok, BarLine{{{0.05, -0.05, 0.0065}, {0.05, 0.05, 0.0065}}, 0.006, 0, 0}}));
+}
+
+TEST_CASE("restart with bars: bit for bit", "[bars][restart]")
+{
+  namespace fs = std::filesystem;
+  const fs::path file = fs::temp_directory_path() / ("dembridge-bars-restart-" + std::to_string(::getpid()) + ".h5");
+  const Steel st = b500();
+  struct Run
+  {
+    Bystander b;
+    std::unique_ptr<DemSolver> s;
+    explicit Run(const Steel& st)
+    {
+      Bars bars = straight_bar(0.05, 5, 5.69e-3, st);
+      const double dt = 0.5 * critical_time_step(b.p, b.l, b.m, bars);
+      s = std::make_unique<DemSolver>(b.p, b.l, b.m, dt, 0.0, 1e-4);
+      const std::int32_t first = 0, last = static_cast<std::int32_t>(bars.nodes() - 1);
+      s->add_bars(std::move(bars));
+      s->move_bar_nodes(std::span<const std::int32_t>(&first, 1), {0, 0, 0});
+      s->move_bar_nodes(std::span<const std::int32_t>(&last, 1), {5.0, 0, 0});
+      s->start();
+    }
+  };
+  Run whole(st);
+  const int total = 600, at = 250;
+  for (int k = 0; k < total; ++k)
+    whole.s->step();
+  REQUIRE(whole.s->energy().bar_plastic > 0.0); // yielded after the checkpoint's step
+  {
+    Run first(st);
+    for (int k = 0; k < at; ++k)
+      first.s->step();
+    auto f = dembridge::checkpoint::File::create(file, "bars test");
+    first.s->save(f.root().group("dem"));
+    f.commit();
+  }
+  Run resumed(st);
+  resumed.s->load(dembridge::checkpoint::File::open(file, "bars test").root().group("dem"));
+  for (int k = at; k < total; ++k)
+    resumed.s->step();
+  fs::remove(file);
+  CHECK(resumed.s->bars().x == whole.s->bars().x);
+  CHECK(resumed.s->bars().v == whole.s->bars().v);
+  CHECK(resumed.s->bars().alpha == whole.s->bars().alpha);
+  CHECK(resumed.s->bar_reaction(1) == whole.s->bar_reaction(1));
+  CHECK(resumed.s->energy().imbalance() == whole.s->energy().imbalance());
+}
