@@ -57,6 +57,19 @@ void BondLaw::validate() const
     refuse("bond radial_stiffness", radial_stiffness, "> 0 Pa/m");
   if (!finite_positive(opening))
     refuse("bond opening stress", opening, "> 0 Pa");
+  if (!(opening_gap > opening / radial_stiffness) || !std::isfinite(opening_gap))
+    refuse("bond opening_gap", opening_gap,
+           "> opening / radial_stiffness = " + std::to_string(opening / radial_stiffness) + " m");
+}
+
+LinkLaw radial_law(const BondLaw& b, double surface)
+{
+  LinkLaw l{};
+  l.kn = b.radial_stiffness * surface;
+  l.s_int = surface;
+  l.tensile = b.opening;
+  l.zeta = b.opening_gap * b.radial_stiffness / b.opening - 1.0;
+  return l;
 }
 
 double BondLaw::k0() const { return tau_max * std::pow(s0 / s1, alpha) / s0; }
@@ -156,8 +169,10 @@ Bars make_bars(std::span<const BarLine> lines, std::vector<Steel> steels,
       return static_cast<std::int32_t>(bars.m.size() - 1);
     };
     std::int32_t prev = add_node(line.points[0]);
+    const double EI = st.youngs_modulus * std::numbers::pi * std::pow(line.diameter, 4) / 64.0;
     for (std::size_t s = 1; s < line.points.size(); ++s)
     {
+      const std::size_t first_element = bars.elements();
       const auto& p0 = line.points[s - 1];
       const auto& p1 = line.points[s];
       const double d[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
@@ -185,6 +200,17 @@ Bars make_bars(std::span<const BarLine> lines, std::vector<Steel> steels,
         bars.m[prev] += 0.5 * st.density * area * l;
         bars.m[next] += 0.5 * st.density * area * l;
         prev = next;
+      }
+      // bending springs inside this straight run (a corner of the polyline
+      // is a hinge: the springs' energy assumes a straight rest shape)
+      for (std::size_t e = first_element + 1; e < bars.elements(); ++e)
+      {
+        bars.bend_a.push_back(bars.a[e - 1]);
+        bars.bend_b.push_back(bars.b[e - 1]);
+        bars.bend_c.push_back(bars.b[e]);
+        bars.bend_e1.push_back(static_cast<std::int32_t>(e - 1));
+        bars.bend_e2.push_back(static_cast<std::int32_t>(e));
+        bars.bend_k.push_back(EI / (0.5 * (bars.l0[e - 1] + bars.l0[e])));
       }
     }
   }
@@ -299,6 +325,7 @@ std::size_t create_bonds(Bars& bars, const Particles& p, double reach)
     bars.slip.push_back(0.0);
     bars.slip_max.push_back(0.0);
     bars.gap.push_back(0.0);
+    bars.gap_max.push_back(0.0);
     bars.open.push_back(0);
     ++per_element[e];
   }
@@ -397,12 +424,16 @@ void bond_force(Bars& bars, Particles& p, std::size_t k, bool advance, bool gone
   const BondLaw& law = bars.bond_laws[bars.bond_law[bars.element[k]]];
   const BondGeometry g = bond_geometry(bars, p, k);
   const double slip = g.axial - bars.axial0[k], gap = g.rho - bars.radial0[k];
-  const double kr = law.radial_stiffness, S = bars.surface[k];
-  if (advance && (gone || kr * gap >= law.opening))
+  const double S = bars.surface[k];
+  const LinkLaw radial = radial_law(law, S);
+  const NormalForce nf = link_normal_force(gap, bars.gap_max[k], radial);
+  if (advance && (gone || nf.state == NormalState::broken))
   {
+    // what the bond stored at the step's start plus its forces' work over
+    // the step, trapezoidal with zero at the end
     const double t0 = bars.tau[k], g0 = bars.gap[k];
-    w.broken += S * (t0 * t0 / (2.0 * law.k0()) + 0.5 * kr * g0 * g0 + 0.5 * t0 * (slip - bars.slip[k])
-                     + 0.5 * kr * g0 * (gap - g0));
+    const double f0 = link_normal_force(g0, bars.gap_max[k], radial).fn;
+    w.broken += S * (t0 * t0 / (2.0 * law.k0()) + 0.5 * t0 * (slip - bars.slip[k])) + 0.5 * f0 * gap;
     bars.open[k] = 1;
     bars.tau[k] = 0.0;
     return;
@@ -417,8 +448,9 @@ void bond_force(Bars& bars, Particles& p, std::size_t k, bool advance, bool gone
     bars.slip[k] = slip;
     bars.slip_max[k] = smax;
     bars.gap[k] = gap;
+    bars.gap_max[k] = nf.delta_max;
   }
-  const double Qs = tau * S, Qg = kr * gap * S, xi = bars.xi[k];
+  const double Qs = tau * S, Qg = nf.fn, xi = bars.xi[k];
   const std::size_t el = bars.element[k];
   double* fc = &p.f[3 * bars.sphere[k]];
   double* fa = &bars.f[3 * bars.a[el]];
@@ -433,12 +465,62 @@ void bond_force(Bars& bars, Particles& p, std::size_t k, bool advance, bool gone
 }
 } // namespace
 
+namespace
+{
+/// Unit directions t1 (a -> b), t2 (b -> c) of bending spring k and the
+/// element lengths; false if one of its elements broke.
+bool bend_geometry(const Bars& bars, std::size_t k, double* t1, double* t2, double& l1, double& l2)
+{
+  if (bars.broken[bars.bend_e1[k]] || bars.broken[bars.bend_e2[k]])
+    return false;
+  const double* xa = &bars.x[3 * bars.bend_a[k]];
+  const double* xb = &bars.x[3 * bars.bend_b[k]];
+  const double* xc = &bars.x[3 * bars.bend_c[k]];
+  for (int q = 0; q < 3; ++q)
+  {
+    t1[q] = xb[q] - xa[q];
+    t2[q] = xc[q] - xb[q];
+  }
+  l1 = std::sqrt(dot(t1, t1));
+  l2 = std::sqrt(dot(t2, t2));
+  for (int q = 0; q < 3; ++q)
+  {
+    t1[q] /= l1;
+    t2[q] /= l2;
+  }
+  return true;
+}
+
+/// The bending spring's forces, -grad of k (1 - c), c = t1 . t2:
+/// dc/dx_a = -(t2 - c t1) / l1, dc/dx_c = (t1 - c t2) / l2, dc/dx_b the
+/// negative of their sum.
+void bend_force(Bars& bars, std::size_t k)
+{
+  double t1[3], t2[3], l1, l2;
+  if (!bend_geometry(bars, k, t1, t2, l1, l2))
+    return;
+  const double c = dot(t1, t2), kb = bars.bend_k[k];
+  double* fa = &bars.f[3 * bars.bend_a[k]];
+  double* fb = &bars.f[3 * bars.bend_b[k]];
+  double* fc = &bars.f[3 * bars.bend_c[k]];
+  for (int q = 0; q < 3; ++q)
+  {
+    const double ga = -(t2[q] - c * t1[q]) / l1, gc = (t1[q] - c * t2[q]) / l2;
+    fa[q] += kb * ga;
+    fc[q] += kb * gc;
+    fb[q] -= kb * (ga + gc);
+  }
+}
+} // namespace
+
 BarWork bar_forces(Bars& bars, Particles& p, bool advance, std::span<const std::uint8_t> gone)
 {
   BarWork w;
   std::fill(bars.f.begin(), bars.f.end(), 0.0);
   for (std::size_t e = 0; e < bars.elements(); ++e)
     element_force(bars, e, advance, w.broken);
+  for (std::size_t k = 0; k < bars.bend_k.size(); ++k)
+    bend_force(bars, k);
   for (std::size_t k = 0; k < bars.bonds(); ++k)
     bond_force(bars, p, k, advance, !gone.empty() && gone[bars.sphere[k]], w);
   return w;
@@ -460,14 +542,22 @@ BarEnergy bar_energy(const Bars& bars, const Particles& p)
       en.elastic += vol * sig * sig / (2.0 * st.youngs_modulus);
     }
   }
+  for (std::size_t k = 0; k < bars.bend_k.size(); ++k)
+  {
+    double t1[3], t2[3], l1, l2;
+    if (bend_geometry(bars, k, t1, t2, l1, l2))
+      en.elastic += bars.bend_k[k] * (1.0 - dot(t1, t2));
+  }
   for (std::size_t k = 0; k < bars.bonds(); ++k)
   {
+    const BondLaw& law = bars.bond_laws[bars.bond_law[bars.element[k]]];
+    const LinkLaw radial = radial_law(law, bars.surface[k]);
+    en.opening += softening_dissipation(bars.gap_max[k], radial);
     if (bars.open[k])
       continue;
-    const BondLaw& law = bars.bond_laws[bars.bond_law[bars.element[k]]];
     const double gap = bond_geometry(bars, p, k).rho - bars.radial0[k];
-    en.elastic += bars.surface[k]
-                  * (bars.tau[k] * bars.tau[k] / (2.0 * law.k0()) + 0.5 * law.radial_stiffness * gap * gap);
+    en.elastic += bars.surface[k] * bars.tau[k] * bars.tau[k] / (2.0 * law.k0())
+                  + 0.5 * link_normal_force(gap, bars.gap_max[k], radial).fn * gap;
   }
   return en;
 }
@@ -488,6 +578,20 @@ void add_bar_rows(const Bars& bars, const Particles& p, std::vector<double>& sph
     const double ma = bars.m[bars.a[e]], mb = bars.m[bars.b[e]];
     node_rows[bars.a[e]] += k / ma + k / std::sqrt(ma * mb);
     node_rows[bars.b[e]] += k / mb + k / std::sqrt(ma * mb);
+  }
+  // a bending spring, linearised: k (theta^2 / 2) with theta the lateral
+  // offset of b against a and c, coefficients (1/l1, -(1/l1 + 1/l2), 1/l2)
+  for (std::size_t k = 0; k < bars.bend_k.size(); ++k)
+  {
+    if (bars.broken[bars.bend_e1[k]] || bars.broken[bars.bend_e2[k]])
+      continue;
+    const double g[3] = {1.0 / bars.l0[bars.bend_e1[k]],
+                         -(1.0 / bars.l0[bars.bend_e1[k]] + 1.0 / bars.l0[bars.bend_e2[k]]),
+                         1.0 / bars.l0[bars.bend_e2[k]]};
+    const std::int32_t nd[3] = {bars.bend_a[k], bars.bend_b[k], bars.bend_c[k]};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        node_rows[nd[i]] += bars.bend_k[k] * std::abs(g[i] * g[j]) / std::sqrt(bars.m[nd[i]] * bars.m[nd[j]]);
   }
   for (std::size_t b = 0; b < bars.bonds(); ++b)
   {

@@ -563,6 +563,7 @@ DemEnergy DemSolver::energy() const
   e.bar_kinetic = be.kinetic;
   e.bar_elastic = be.elastic;
   e.bar_plastic = be.plastic;
+  e.bar_opening = be.opening;
   return e;
 }
 

@@ -96,7 +96,7 @@ void DemSolver::save_bars(const checkpoint::Group& g) const
   const Bars& b = _bars;
   for (auto [name, v] : {std::pair{"x", &b.x}, {"v", &b.v}, {"f", &b.f}, {"plastic", &b.plastic},
                          {"alpha", &b.alpha}, {"force", &b.force}, {"length", &b.length}, {"tau", &b.tau},
-                         {"slip", &b.slip}, {"slip_max", &b.slip_max}, {"gap", &b.gap}, {"m", &b.m},
+                         {"slip", &b.slip}, {"slip_max", &b.slip_max}, {"gap", &b.gap}, {"gap_max", &b.gap_max}, {"m", &b.m},
                          {"surface", &b.surface}, {"fold", &_bar_fold}})
     g.write(name, *v);
   for (auto [name, v] : {std::pair{"broken", &b.broken}, {"open", &b.open}, {"held", &b.held}})
@@ -129,7 +129,8 @@ void DemSolver::load_bars(const checkpoint::Group& g)
   };
   for (auto [name, v] : {std::pair{"x", &b.x}, {"v", &b.v}, {"f", &b.f}, {"plastic", &b.plastic},
                          {"alpha", &b.alpha}, {"force", &b.force}, {"length", &b.length}, {"tau", &b.tau},
-                         {"slip", &b.slip}, {"slip_max", &b.slip_max}, {"gap", &b.gap}, {"surface", &b.surface}})
+                         {"slip", &b.slip}, {"slip_max", &b.slip_max}, {"gap", &b.gap}, {"gap_max", &b.gap_max},
+                         {"surface", &b.surface}})
     same(name, *v);
   for (auto [name, v] : {std::pair{"broken", &b.broken}, {"open", &b.open}, {"held", &b.held}})
     same(name, *v);

@@ -1,7 +1,8 @@
 #pragma once
 /// @file bars.h
 /// Reinforcing bars in the DE zone (docs/method.md section 1.15): each bar a
-/// chain of two-node axial elements (trusses) of elastic-plastic steel, its
+/// chain of two-node axial elements of elastic-plastic steel with elastic
+/// bending springs at the nodes between them (a rotation-free rod), its
 /// nodes moved by the spheres' velocity Verlet step, and tied to the
 /// surrounding spheres by bonds: a bond stress-slip law along the bar (fib
 /// Model Code 2010, pull-out) and a radial spring that opens in tension.
@@ -41,9 +42,11 @@ struct Steel
 ///   tau = tau_f = tau_f_ratio tau_max           s > s3
 /// with K0 = tau_max (s0 / s1)^alpha / s0 (the power law's slope is infinite
 /// at s = 0). Unloading and reloading follow K0 (bond_shear).
-/// Across it, a radial spring of stiffness k_r per unit bar surface: linear
-/// in compression; in tension it opens (the bond is lost, along the bar
-/// too) when its stress reaches `opening`.
+/// Across it, a radial spring of stiffness k_r per unit bar surface:
+/// linear in compression; in tension the concrete's law of a link (law.h:
+/// link_normal_force) with the peak stress `opening` and a linear softening
+/// to zero at the radial gap `opening_gap`, unloading on the secant. At
+/// that gap the bond opens: no force any more, along the bar either.
 struct BondLaw
 {
   double tau_max = 13.7e6;   ///< [Pa] (fib: 2.5 sqrt(f_cm[MPa]), good bond)
@@ -54,7 +57,8 @@ struct BondLaw
   double alpha = 0.4;        ///< [-], in (0, 1]
   double tau_f_ratio = 0.4;  ///< tau_f / tau_max [-], in [0, 1]
   double radial_stiffness = 1e13; ///< k_r [Pa/m], > 0
-  double opening = 3e6;      ///< radial tensile stress that opens the bond [Pa], > 0
+  double opening = 3e6;      ///< radial tensile strength of the interface [Pa], > 0
+  double opening_gap = 0.1e-3; ///< radial gap at which the bond opens [m], > opening / k_r
   /// @throws std::runtime_error naming the value and its allowed range.
   void validate() const;
   double k0() const; ///< K0 [Pa/m]
@@ -110,13 +114,18 @@ struct Bars
   std::vector<double> plastic, alpha;     ///< eps_p, accumulated plastic strain
   std::vector<double> force, length;      ///< axial force [N] and length [m] at the last step
   std::vector<std::uint8_t> steel, bond_law, broken; ///< indices into the tables; 1 once broken
+  // bending springs at the nodes inside a straight run of a bar: energy
+  // k (1 - t1 . t2), t1 and t2 the unit directions of the elements
+  // (a -> b) and (b -> c), k = E I / ((l1 + l2) / 2)
+  std::vector<std::int32_t> bend_a, bend_b, bend_c, bend_e1, bend_e2;
+  std::vector<double> bend_k;
   // bonds: sphere to a material point of an element
   std::vector<std::int32_t> sphere, element;
   std::vector<double> xi;                 ///< the point's place along the element, in [0, 1]
   std::vector<double> surface;            ///< bar surface the bond carries, pi d l [m^2]
   std::vector<double> axial0, radial0;    ///< the sphere's axial and radial offsets at creation [m]
   std::vector<double> tau, slip, slip_max; ///< bond stress [Pa], slip [m] (sphere along the bar), largest |slip|
-  std::vector<double> gap;                 ///< radial opening [m] (> 0 apart) at the last step
+  std::vector<double> gap, gap_max;        ///< radial gap [m] (> 0 apart) at the last step, the largest so far
   std::vector<std::uint8_t> open;          ///< 1: the bond opened (no force any more)
   std::size_t nodes() const { return m.size(); }
   std::size_t elements() const { return a.size(); }
@@ -153,7 +162,12 @@ struct BarEnergy
   double kinetic = 0.0; ///< of the nodes
   double elastic = 0.0; ///< steel sigma^2 / (2 E) A l0, bond tau^2 / (2 K0) and k_r g^2 / 2 per surface
   double plastic = 0.0; ///< steel plastic work (a state of alpha)
+  double opening = 0.0; ///< the bonds' radial softening (a state of the largest gap)
 };
+
+/// The radial law of bond law b on a bond of surface S as a link's law
+/// (kn = k_r S, S_int = S, T = opening, zeta from opening_gap).
+LinkLaw radial_law(const BondLaw& b, double surface);
 BarEnergy bar_energy(const Bars& bars, const Particles& p);
 
 /// What one force call dissipated or released [J].

@@ -45,12 +45,13 @@ struct DemEnergy
   double bar_kinetic = 0.0; ///< the bar nodes' kinetic energy
   double bar_elastic = 0.0; ///< the bars' steel and bonds (bars.h: BarEnergy)
   double bar_plastic = 0.0; ///< the steel's plastic work (a state)
+  double bar_opening = 0.0; ///< the bonds' radial softening (a state)
   double bar_slip = 0.0;    ///< dissipated by the bonds' slip beyond their envelope
   double bar_broken = 0.0;  ///< released by bar elements that broke and bonds that opened
   double imbalance() const
   {
     return kinetic + elastic + softening + compaction + breakage + friction + damping + body_kinetic
-           + body_contact + body_friction + removed + bar_kinetic + bar_elastic + bar_plastic + bar_slip
+           + body_contact + body_friction + removed + bar_kinetic + bar_elastic + bar_plastic + bar_opening + bar_slip
            + bar_broken - initial - external_work - prescribed_work;
   }
 };
