@@ -163,10 +163,17 @@ private:
       solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
     _fraction = solid / region.volume;
     const Material& mat = _s.material.material;
-    _p = make_particles(_pk.x, _pk.r, mat.density, _fraction);
+    // the bars take their room: the spheres they overlap are left out
+    std::vector<double> x = _pk.x, r = _pk.r;
+    if (_s.reinforcement.any())
+      lay_bars(x, r);
+    _p = make_particles(x, r, mat.density, _fraction);
     const auto bulk = bulk_spheres(region, _p.x, _p.r);
     _lambda = lambda_for_mean_links(_p.x, _p.r, _s.material.links_per_sphere, bulk);
     _links = create_links(_p, _lambda, mat);
+    if (_s.reinforcement.any())
+      _bonds = create_bonds(_bars, _p, _s.reinforcement.bond_reach > 0.0 ? _s.reinforcement.bond_reach
+                                                                         : 0.5 * mean(_p.r));
     _rmax = *std::max_element(_p.r.begin(), _p.r.end());
     _rmin = *std::min_element(_p.r.begin(), _p.r.end());
     _initial_links.assign(_p.size(), 0);
@@ -175,6 +182,34 @@ private:
       ++_initial_links[_links.a[k]];
       ++_initial_links[_links.b[k]];
     }
+  }
+
+  /// The bars (make_bars) and the spheres of the packing that overlap
+  /// none of them (x, r reduced to those).
+  void lay_bars(std::vector<double>& x, std::vector<double>& r)
+  {
+    const ReinforcementSpec& b = _s.reinforcement;
+    const double h = b.element_length > 0.0 ? b.element_length : 2.0 * mean(r);
+    try
+    {
+      _bars = make_bars(bar_lines(_s), {b.steel}, {b.bond}, h);
+    }
+    catch (const std::exception& e)
+    {
+      throw std::runtime_error(std::string("reinforcement: ") + e.what());
+    }
+    const auto on = spheres_on_bars(_bars, x, r);
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < r.size(); ++i)
+      if (!on[i])
+      {
+        for (int k = 0; k < 3; ++k)
+          x[3 * kept + k] = x[3 * i + k];
+        r[kept++] = r[i];
+      }
+    _spheres_on_bars = r.size() - kept;
+    x.resize(3 * kept);
+    r.resize(kept);
   }
 
   /// A packing file's spheres, those centred in the slab (a sphere outside
@@ -246,10 +281,10 @@ private:
   {
     const RunSpec& run = _s.run;
     const Material& mat = _s.material.material;
-    _dt_crit = critical_time_step(_p, _links, mat);
+    _dt_crit = _s.reinforcement.any() ? critical_time_step(_p, _links, mat, _bars) : critical_time_step(_p, _links, mat);
     if (run.dt > _dt_crit)
       throw std::runtime_error("run.dt_s = " + fmt(run.dt) + " s is above the critical time step " + fmt(_dt_crit)
-                               + " s (links and projectile contact): give a smaller one, or 0 for safety_factor x "
+                               + " s (links, projectile contact and bars): give a smaller one, or 0 for safety_factor x "
                                  "critical");
     _dt = run.dt > 0.0 ? run.dt : run.safety * _dt_crit;
     const ProjectileSpec& q = _s.projectile;
@@ -265,6 +300,8 @@ private:
     _solver->set_domain({_lo[0] - margin, _lo[1] - margin, _lo[2] - margin},
                         {_hi[0] + margin, _hi[1] + margin, _hi[2] + margin});
     _solver->add_body(_body);
+    if (_s.reinforcement.any())
+      _solver->add_bars(_bars);
     _solver->start();
     _history_every = run.history_every > 0 ? run.history_every : std::max<std::int64_t>(1, _crossing_steps / 1000);
   }
@@ -303,17 +340,36 @@ private:
     _out["projectile_mass_kg"] = _body.mass;
     _out["striking_velocity_m_s"] = _s.projectile.velocity;
     _out["spheres_across_diameter"] = _s.projectile.diameter / (2.0 * mean(_p.r));
+    if (_s.reinforcement.any())
+    {
+      double mass = 0.0;
+      for (double m : _bars.m)
+        mass += m;
+      _out["reinforcement"] = {{"bars", _bars.line.empty() ? 0 : _bars.line.back() + 1},
+                               {"elements", _bars.elements()},
+                               {"bonds", _bonds},
+                               {"bar_mass_kg", mass},
+                               {"spheres_left_out", _spheres_on_bars}};
+    }
   }
 
   // ---- output and restart ---------------------------------------------------
   std::filesystem::path dir() const { return _cfg.output_dir; }
 
-  void open_writer(const checkpoint::Group* resume)
+  /// The output series, new or (root: a checkpoint's) continued.
+  void open_writer(const checkpoint::Group* root)
   {
     const auto file = dir() / "particles.xdmf";
-    _writer = resume ? std::make_unique<ParticleWriter>(file, _links, _p.size(), true, *resume)
-                     : std::make_unique<ParticleWriter>(file, _links, _p.size(), true);
+    _writer = root ? std::make_unique<ParticleWriter>(file, _links, _p.size(), true, root->group("particles_xdmf"))
+                   : std::make_unique<ParticleWriter>(file, _links, _p.size(), true);
     _writer->add_surface("projectile", body_surface(_shape));
+    if (_s.reinforcement.any())
+    {
+      const auto bars = dir() / "bars.xdmf";
+      const auto& b = _solver->bars();
+      _bar_writer = root ? std::make_unique<BarWriter>(bars, b, root->group("bars_xdmf"))
+                         : std::make_unique<BarWriter>(bars, b);
+    }
   }
 
   void open_output()
@@ -350,8 +406,7 @@ private:
     _out["restarted_from_step"] = _solver->steps();
     if (_cfg.output_dir.empty())
       return;
-    const auto g = root.group("particles_xdmf");
-    open_writer(&g);
+    open_writer(&root);
     reopen_text(_csv, dir() / "history.csv", run.read_int("csv_bytes"));
   }
 
@@ -363,6 +418,8 @@ private:
     run.write_int("next_frame", _next_frame);
     if (_writer)
       _writer->save(root.group("particles_xdmf"));
+    if (_bar_writer)
+      _bar_writer->save(root.group("bars_xdmf"));
     if (_csv.is_open())
       run.write_int("csv_bytes", flushed_size(_csv, dir() / "history.csv"));
   }
@@ -371,6 +428,8 @@ private:
   {
     const RigidBody& b = _solver->body(0);
     _writer->write(_solver->time(), _p, _links, std::span<const RigidBody>(&b, 1));
+    if (_bar_writer)
+      _bar_writer->write(_solver->time(), _solver->bars());
   }
 
   // ---- the projectile's state -----------------------------------------------
@@ -411,7 +470,12 @@ private:
               << " Pa, C0 " << m.cohesion << " Pa, rate effect " << (m.rate_fc > 0 ? fmt(m.rate_fc) + " Pa" : "off")
               << "\n# " << _p.size() << " spheres (" << fmt(_out["spheres_across_diameter"].get<double>(), 3)
               << " across the projectile), " << _links.size() << " links (lambda " << fmt(_lambda) << "), "
-              << _supported << " held\n# projectile " << fmt(_body.mass) << " kg at " << _s.projectile.velocity
+              << _supported << " held\n";
+    if (_s.reinforcement.any())
+      std::cout << "# reinforcement: " << _out["reinforcement"]["bars"] << " bars of " << _s.reinforcement.bar_diameter
+                << " m, " << _bars.elements() << " elements, " << _bonds << " bonds; f_y " << _s.reinforcement.steel.yield
+                << " Pa, bond tau_max " << _s.reinforcement.bond.tau_max << " Pa\n";
+    std::cout << "# projectile " << fmt(_body.mass) << " kg at " << _s.projectile.velocity
               << " m/s (" << fmt(_ke0) << " J); dt " << fmt(_dt) << " s (critical " << fmt(_dt_crit) << "), up to "
               << _nsteps << " steps (" << fmt(_duration) << " s)\n"
               << "      time [s]  speed [m/s]  depth [m]  force [N]  broken  removed  imbalance/KE0\n";
@@ -484,6 +548,8 @@ private:
     {
       write_frame();
       _writer->close();
+      if (_bar_writer)
+        _bar_writer->close();
     }
     if (!_cfg.quiet)
       progress();
@@ -517,6 +583,29 @@ private:
     _out["seconds_per_link_step"] = link_steps > 0 ? wall / link_steps : 0.0;
     _out["seconds_per_particle_step"] = wall / (static_cast<double>(_p.size()) * std::max<std::int64_t>(1, _solver->steps()));
     _out["neighbour_rebuilds"] = _solver->neighbours().builds();
+    if (_s.reinforcement.any())
+      report_bars();
+  }
+
+  void report_bars()
+  {
+    const Bars& b = _solver->bars();
+    double eps_p = 0.0, force = 0.0;
+    std::size_t broken_elements = 0, open = 0;
+    for (std::size_t e = 0; e < b.elements(); ++e)
+    {
+      eps_p = std::max(eps_p, std::abs(b.plastic[e]));
+      force = std::max(force, std::abs(b.force[e]));
+      broken_elements += b.broken[e];
+    }
+    for (std::size_t k = 0; k < b.bonds(); ++k)
+      open += b.open[k];
+    auto& r = _out["reinforcement"];
+    r["max_plastic_strain"] = eps_p;
+    r["max_axial_force_n"] = force;
+    r["elements_broken"] = broken_elements;
+    r["bonds_open"] = open;
+    _out["step_time_s"]["bars"] = _solver->timings().bars;
   }
 
   void measure_damage()
@@ -580,6 +669,12 @@ private:
                       {"projectile_friction_j", e.body_friction},
                       {"damping_j", e.damping},
                       {"removed_j", e.removed},
+                      {"bar_kinetic_j", e.bar_kinetic},
+                      {"bar_elastic_j", e.bar_elastic},
+                      {"bar_plastic_j", e.bar_plastic},
+                      {"bond_slip_j", e.bar_slip},
+                      {"bond_opening_j", e.bar_opening},
+                      {"bar_broken_j", e.bar_broken},
                       {"support_work_j", e.prescribed_work},
                       {"imbalance_j", e.imbalance()},
                       {"imbalance_share", e.imbalance() / _ke0}};
@@ -603,6 +698,9 @@ private:
   std::unique_ptr<DemSolver> _solver;
   std::unique_ptr<Checkpointer> _ckpt;
   std::unique_ptr<ParticleWriter> _writer;
+  std::unique_ptr<BarWriter> _bar_writer;
+  Bars _bars;
+  std::size_t _bonds = 0, _spheres_on_bars = 0;
   std::ofstream _csv;
   double _max_depth = -1e300, _peak_force = 0.0;
   bool _touched = false;

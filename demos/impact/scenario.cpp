@@ -162,6 +162,48 @@ public:
     return v;
   }
 
+  /// An array of polylines, each an array of points [x, y, z].
+  std::vector<std::vector<std::array<double, 3>>> polylines(const std::string& key, const std::string& meaning)
+  {
+    const toml::node* n = get(key, meaning, "[]", "an array of polylines, each an array of >= 2 points [x, y, z]");
+    std::vector<std::vector<std::array<double, 3>>> lines;
+    nlohmann::json rec = nlohmann::json::array();
+    if (n)
+    {
+      const std::string expect = "must be an array of polylines, each an array of >= 2 points [x, y, z] in m, not ";
+      const toml::array* a = n->as_array();
+      if (!a)
+        fail(key, expect + show(*n));
+      for (const toml::node& ln : *a)
+      {
+        const toml::array* pts = ln.as_array();
+        if (!pts || pts->size() < 2)
+          fail(key, expect + show(ln));
+        std::vector<std::array<double, 3>> line;
+        for (const toml::node& pt : *pts)
+        {
+          const toml::array* c = pt.as_array();
+          if (!c || c->size() != 3)
+            fail(key, expect + show(pt));
+          std::array<double, 3> x{};
+          for (std::size_t k = 0; k < 3; ++k)
+          {
+            if (!c->get(k)->is_number())
+              fail(key, expect + show(pt));
+            x[k] = c->get(k)->value<double>().value();
+            if (!std::isfinite(x[k]))
+              fail(key, expect + show(pt));
+          }
+          line.push_back(x);
+        }
+        lines.push_back(line);
+        rec.push_back(line);
+      }
+    }
+    record(key, rec);
+    return lines;
+  }
+
   /// @throws std::runtime_error naming the file and the section's key.
   [[noreturn]] void fail(const std::string& key, const std::string& what) const
   {
@@ -332,6 +374,52 @@ TargetSpec read_target(Reader& r)
   return t;
 }
 
+ReinforcementSpec read_reinforcement(Reader& r)
+{
+  r.section("reinforcement", "steel bars in the slab, bonded to the concrete (docs/method.md 1.15)");
+  ReinforcementSpec b;
+  b.layers = static_cast<int>(r.integer("layers", b.layers, Allowed::closed(0, 100),
+                                        "mats of bars along x and y, spread through the thickness (one: at the "
+                                        "rear face); 0 = none"));
+  b.bar_diameter = r.number("bar_diameter_m", b.bar_diameter, Allowed::positive(1.0).or_value(0.0, "no bars"),
+                            "bar diameter, of the mats and the polylines [m]");
+  b.spacing = r.numbers<2>("spacing_m", b.spacing, Allowed::positive(100.0),
+                           "distance between neighbouring bars along x, and between those along y [m]");
+  b.cover = r.number("cover_m", b.cover, Allowed::positive(10.0).or_value(0.0, "2 bar diameters"),
+                     "from each face to the axis of the bars nearest to it (>= the bar radius) [m]");
+  b.polylines = r.polylines("bars_m", "bars given as polylines, e.g. [[[x0, y0, z0], [x1, y1, z1]]] [m]");
+  dem::Steel& st = b.steel;
+  st.youngs_modulus = r.number("steel_youngs_modulus_pa", st.youngs_modulus, Allowed::positive(1e13), "E_s [Pa]");
+  st.density = r.number("steel_density_kg_m3", st.density, Allowed::positive(1e5), "[kg/m^3]");
+  st.yield = r.number("steel_yield_pa", st.yield, Allowed::positive(1e11), "yield strength f_y [Pa]");
+  st.hardening = r.number("steel_hardening_pa", st.hardening, Allowed::non_negative(1e13),
+                          "hardening modulus H = d sigma / d plastic strain [Pa]");
+  st.rupture_strain = r.number("steel_rupture_strain", st.rupture_strain, Allowed::positive(10.0),
+                               "strain at which a bar breaks (above f_y / E_s) [-]");
+  dem::BondLaw& bl = b.bond;
+  bl.tau_max = r.number("bond_tau_max_pa", bl.tau_max, Allowed::positive(1e10),
+                        "peak bond stress (fib MC2010, good bond: 2.5 sqrt(f_cm[MPa]) MPa) [Pa]");
+  bl.s0 = r.number("bond_s0_m", bl.s0, Allowed::positive(1.0), "end of the bond law's linear start (< s1) [m]");
+  bl.s1 = r.number("bond_s1_m", bl.s1, Allowed::positive(1.0), "slip at the peak [m]");
+  bl.s2 = r.number("bond_s2_m", bl.s2, Allowed::positive(1.0), "end of the plateau (>= s1) [m]");
+  bl.s3 = r.number("bond_s3_m", bl.s3, Allowed::positive(1.0), "end of the descent (> s2; fib: the clear rib spacing) [m]");
+  bl.alpha = r.number("bond_alpha", bl.alpha, Allowed::above(0.0, 1.0), "exponent of the rising branch [-]");
+  bl.tau_f_ratio = r.number("bond_tau_f_ratio", bl.tau_f_ratio, Allowed::closed(0.0, 1.0),
+                            "residual bond stress over the peak [-]");
+  bl.radial_stiffness = r.number("bond_radial_stiffness_pa_m", bl.radial_stiffness, Allowed::positive(1e20),
+                                 "radial stiffness per unit bar surface [Pa/m]");
+  bl.opening = r.number("bond_opening_pa", bl.opening, Allowed::positive(1e10),
+                        "radial tensile strength of the bar-concrete interface [Pa]");
+  bl.opening_gap = r.number("bond_opening_gap_m", bl.opening_gap, Allowed::positive(1.0),
+                            "radial gap at which the bond opens (> opening / radial stiffness) [m]");
+  b.element_length = r.number("element_length_m", b.element_length,
+                              Allowed::positive(10.0).or_value(0.0, "the mean sphere diameter"),
+                              "length of the bars' elements, at most [m]");
+  b.bond_reach = r.number("bond_reach_m", b.bond_reach, Allowed::non_negative(1.0).or_value(0.0, "half the mean radius"),
+                          "a sphere is bonded when its surface lies within this of a bar's [m]");
+  return b;
+}
+
 ProjectileSpec read_projectile(Reader& r)
 {
   r.section("projectile", "the rigid projectile: a cylinder shank and its nose, axis along its path");
@@ -385,6 +473,7 @@ Scenario read_sections(Reader& r, const std::filesystem::path& file)
   s.name = r.text("name", "impact", "", "the case's name (in the summary and plots)");
   s.material = read_material_section(r, file);
   s.target = read_target(r);
+  s.reinforcement = read_reinforcement(r);
   s.projectile = read_projectile(r);
   s.run = read_run(r);
   s.resolved = r.resolved();
@@ -399,7 +488,7 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
   toml::table root;
   if (!std::filesystem::is_regular_file(file))
     throw std::runtime_error("scenario " + file.string() + ": no such file (give a scenario file, or the name of "
-                             "a shipped one: small, hanchak-48, semi-infinite)");
+                             "a shipped one: small, small-rc, hanchak-48, semi-infinite)");
   try
   {
     root = toml::parse_file(file.string());
@@ -424,7 +513,98 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
   {
     throw std::runtime_error("scenario " + file.string() + ": [material]: " + e.what());
   }
+  const ReinforcementSpec& b = s.reinforcement;
+  try
+  {
+    b.steel.validate();
+    b.bond.validate();
+  }
+  catch (const std::exception& e)
+  {
+    throw std::runtime_error("scenario " + file.string() + ": [reinforcement]: " + e.what());
+  }
+  if (b.any() && !(b.bar_diameter > 0.0))
+    throw std::runtime_error("scenario " + file.string() + ": reinforcement.bar_diameter_m = 0: give the bars' "
+                             "diameter (> 0 m) with layers or bars_m");
+  bar_lines(s); // the layout's own checks
   return s;
+}
+
+std::vector<dem::BarLine> bar_lines(const Scenario& s)
+{
+  const ReinforcementSpec& b = s.reinforcement;
+  const TargetSpec& t = s.target;
+  const std::string at = "scenario " + s.file.string() + ": reinforcement.";
+  std::vector<dem::BarLine> lines;
+  if (!b.any())
+    return lines;
+  const double d = b.bar_diameter, cover = b.cover > 0.0 ? b.cover : 2.0 * d;
+  if (b.layers > 0)
+  {
+    if (cover < 0.5 * d)
+      throw std::runtime_error(at + "cover_m = " + number_text(cover) + ": allowed >= the bar radius "
+                               + number_text(0.5 * d) + " m (the bars inside the slab)");
+    for (int k = 0; k < 2; ++k)
+      if (!(b.spacing[k] > d))
+        throw std::runtime_error(at + "spacing_m = [" + number_text(b.spacing[0]) + ", " + number_text(b.spacing[1])
+                                 + "]: each allowed > the bar diameter " + number_text(d) + " m (bars apart)");
+    // a mat: bars along x on top of bars along y, their axes 1.001 d apart;
+    // the outermost axes `cover` from the faces
+    const double gap = 1.001 * d;
+    const double top = -cover - 0.5 * gap, bottom = -t.thickness + cover + 0.5 * gap;
+    // adjacent mats' centres at least 2 gaps apart (the lower mat's top bars
+    // one diameter below the upper mat's bottom ones)
+    if (b.layers > 1 && (top - bottom) / (b.layers - 1) < 2.0 * gap)
+      throw std::runtime_error(at + "layers = " + std::to_string(b.layers) + ": the mats (" + number_text(2 * gap)
+                               + " m apart at least) do not fit between the covers (cover_m " + number_text(cover)
+                               + " m) in the thickness " + number_text(t.thickness) + " m");
+    if (b.layers == 1 && bottom + 0.5 * gap + 0.5 * d > 0.0)
+      throw std::runtime_error(at + "cover_m = " + number_text(cover) + ": the mat does not fit in the thickness "
+                               + number_text(t.thickness) + " m");
+    for (int m = 0; m < b.layers; ++m)
+    {
+      const double zc = b.layers == 1 ? bottom : top - (top - bottom) * m / (b.layers - 1);
+      for (int dir = 0; dir < 2; ++dir)
+      {
+        // bars along x (dir 0) lie across y, spaced spacing[0]
+        const double across = t.size[1 - dir], s_k = b.spacing[dir];
+        const int n = static_cast<int>(std::floor((across - 2.0 * cover) / s_k + 1e-9)) + 1;
+        const double z = zc + (dir == 0 ? 0.5 : -0.5) * gap;
+        for (int k = 0; k < n; ++k)
+        {
+          const double c = (k - 0.5 * (n - 1)) * s_k;
+          const double half = 0.5 * t.size[dir];
+          dem::BarLine line;
+          line.diameter = d;
+          line.points = dir == 0 ? std::vector<std::array<double, 3>>{{-half, c, z}, {half, c, z}}
+                                 : std::vector<std::array<double, 3>>{{c, -half, z}, {c, half, z}};
+          lines.push_back(line);
+        }
+      }
+    }
+  }
+  for (std::size_t q = 0; q < b.polylines.size(); ++q)
+  {
+    dem::BarLine line;
+    line.diameter = d;
+    line.points = b.polylines[q];
+    // some part inside the slab (bars may leave it through its faces)
+    bool inside = false;
+    for (std::size_t k = 1; k < line.points.size() && !inside; ++k)
+      for (int j = 0; j <= 100 && !inside; ++j)
+      {
+        const double u = j / 100.0;
+        const auto& a = line.points[k - 1];
+        const auto& c = line.points[k];
+        const double x = a[0] + u * (c[0] - a[0]), y = a[1] + u * (c[1] - a[1]), z = a[2] + u * (c[2] - a[2]);
+        inside = std::abs(x) < 0.5 * t.size[0] && std::abs(y) < 0.5 * t.size[1] && z < 0.0 && z > -t.thickness;
+      }
+    if (!inside)
+      throw std::runtime_error(at + "bars_m: bar " + std::to_string(q) + " lies outside the target (the slab is x, y "
+                               "in [-size/2, size/2], z in [-thickness, 0])");
+    lines.push_back(line);
+  }
+  return lines;
 }
 
 std::string scenario_keys()

@@ -9,6 +9,7 @@
 /// `projectile.velocity_m_s=600`) as if the file said so.
 
 #include "dembridge/dem/assembly.h"
+#include "dembridge/dem/bars.h"
 
 #include <array>
 #include <filesystem>
@@ -39,6 +40,22 @@ struct TargetSpec
   std::string packing_file;             ///< "" = generate
   std::string supports = "sides";       ///< sides (lateral faces held) | rear-edges | none
   double support_width = 0.0;           ///< band held [m]; 0 = 2 Rmax
+};
+
+/// Reinforcement: mats of bars along x and y through the thickness, and/or
+/// bars given as polylines; their steel and bond (docs/impact.md).
+struct ReinforcementSpec
+{
+  int layers = 0;                          ///< mats; 0 = none
+  double bar_diameter = 0.0;               ///< [m]
+  std::array<double, 2> spacing{0.1, 0.1}; ///< between the bars along x (in y), along y (in x) [m]
+  double cover = 0.0;                      ///< face to the axis of the outermost bars [m]; 0 = 2 bar diameters
+  std::vector<std::vector<std::array<double, 3>>> polylines; ///< explicit bars [m]
+  dem::Steel steel;
+  dem::BondLaw bond;
+  double element_length = 0.0; ///< [m]; 0 = the mean sphere diameter
+  double bond_reach = 0.0;     ///< [m]; 0 = half the mean sphere radius
+  bool any() const { return layers > 0 || !polylines.empty(); }
 };
 
 struct ProjectileSpec
@@ -75,6 +92,7 @@ struct Scenario
   std::string name;
   MaterialSpec material;
   TargetSpec target;
+  ReinforcementSpec reinforcement;
   ProjectileSpec projectile;
   RunSpec run;
   /// Every key with the value used (defaults included), "section.key" ->
@@ -87,6 +105,14 @@ struct Scenario
 /// it are relative to the scenario's folder.
 /// @throws std::runtime_error naming the file, the key and what is allowed.
 Scenario read_scenario(const std::filesystem::path& file, const std::vector<std::string>& sets = {});
+
+/// The bars of the scenario's reinforcement: the mats' bars (along x above
+/// along y in each mat, the mats spread evenly from the struck face's cover
+/// to the rear face's; one mat lies at the rear face's), then the polylines.
+/// @throws std::runtime_error naming the key: a cover below the bar radius,
+///   mats that do not fit in the thickness, a spacing not above the
+///   diameter, a polyline with no part inside the slab.
+std::vector<dem::BarLine> bar_lines(const Scenario& s);
 
 /// The scenario keys with their meaning, unit and default, one per line
 /// (`impact --keys`; docs/impact.md lists the same).

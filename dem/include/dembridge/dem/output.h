@@ -7,6 +7,7 @@
 /// so what was written stays readable if the run stops.
 
 #include "dembridge/dem/assembly.h"
+#include "dembridge/dem/bars.h"
 #include "dembridge/dem/body.h"
 #include "dembridge/core/checkpoint.h"
 
@@ -61,6 +62,34 @@ private:
     SurfaceMesh mesh;
   };
   std::vector<Surface> _surfaces;
+};
+
+/// XDMF + HDF5 time series of the bars (bars.h) for ParaView: a line mesh of
+/// their elements, the nodes' positions and displacements [m], and per
+/// element its axial force [N], plastic strain [-], the mean slip of its
+/// bonds [m] (|slip|, 0 without a bond) and whether it broke (0 or 1).
+class BarWriter
+{
+public:
+  /// Creates `file` (.xdmf) and the .h5 beside it.
+  BarWriter(const std::filesystem::path& file, const Bars& bars);
+  /// Continues the series from a checkpoint written by save() (frames after
+  /// it dropped).
+  BarWriter(const std::filesystem::path& file, const Bars& bars, const checkpoint::Group& resume);
+  ~BarWriter();
+  BarWriter(const BarWriter&) = delete;
+  BarWriter& operator=(const BarWriter&) = delete;
+  void write(double t, const Bars& bars);
+  void close();
+  void save(const checkpoint::Group& g) const;
+  std::size_t frames() const { return _times.size(); }
+
+private:
+  void write_xdmf() const;
+  std::filesystem::path _xdmf, _h5;
+  long _file = -1; // hid_t
+  std::size_t _nodes, _elements;
+  std::vector<double> _times;
 };
 
 } // namespace dembridge::dem
