@@ -3,12 +3,15 @@
 // discretisation's independence, the bond's kinematics (rigid motions,
 // momentum, moment, energy), bad input, restart.
 #include "dembridge/dem/bars.h"
+#include "dembridge/dem/material_file.h"
 #include "dembridge/dem/packing.h"
 #include "dembridge/dem/solver.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <numbers>
 #include <unistd.h>
 
@@ -485,4 +488,49 @@ TEST_CASE("pull-out of a bar from a DE cylinder follows the bond law", "[bars][p
   CHECK(std::abs(e.imbalance()) < 0.01 * e.prescribed_work);
   WARN("pull-out: largest deviation from the curve " << worst * 100 << " %, " << r.size() << " spheres, " << nb
                                                       << " bonds, " << s.steps() << " steps");
+}
+
+TEST_CASE("material file format 2: steel and bond tables, read back; format 1 still read", "[bars][material]")
+{
+  namespace fs = std::filesystem;
+  const fs::path file = fs::temp_directory_path() / ("dembridge-material2-" + std::to_string(::getpid()) + ".json");
+  MaterialFile m;
+  m.material.micro = {3.9, 3.7, 1.0};
+  Steel st = b500();
+  BondLaw bl;
+  bl.tau_max = 17.3e6;
+  m.steel = st;
+  m.bond = bl;
+  write_material(file, m);
+  const MaterialFile r = read_material(file);
+  REQUIRE(r.steel);
+  REQUIRE(r.bond);
+  CHECK(r.steel->yield == st.yield);
+  CHECK(r.steel->hardening == st.hardening);
+  CHECK(r.steel->rupture_strain == st.rupture_strain);
+  CHECK(r.bond->tau_max == bl.tau_max);
+  CHECK(r.bond->opening_gap == bl.opening_gap);
+  // a file of format 1 (the shipped concrete) has neither
+  const MaterialFile d = read_material(fs::path(DEMBRIDGE_SOURCE_DIR) / "demos/calibrate/materials/default.json");
+  CHECK_FALSE(d.steel);
+  CHECK_FALSE(d.bond);
+  // errors name the file and the key
+  std::string text;
+  {
+    std::ifstream in(file);
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  auto with = [&](const std::string& from, const std::string& to)
+  {
+    std::string t = text;
+    t.replace(t.find(from), from.size(), to);
+    std::ofstream(file) << t;
+  };
+  with("\"yield_pa\"", "\"yeild_pa\"");
+  CHECK_THROWS_WITH(read_material(file), Contains("unknown key 'steel.yeild_pa'"));
+  with("\"hardening_pa\": 2000000000.0", "\"hardening_pa\": -1.0");
+  CHECK_THROWS_WITH(read_material(file), Contains("hardening modulus H = -1"));
+  with("\"dembridge-material-2\"", "\"dembridge-material-9\"");
+  CHECK_THROWS_WITH(read_material(file), Contains("expected \"dembridge-material-2\""));
+  fs::remove(file);
 }

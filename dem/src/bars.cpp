@@ -5,6 +5,7 @@
 #include <numbers>
 #include <sstream>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <tuple>
 
@@ -284,14 +285,88 @@ double bar_radius(const Bars& bars, std::size_t e) { return std::sqrt(bars.area[
 } // namespace
 
 std::vector<std::uint8_t> spheres_on_bars(const Bars& bars, std::span<const double> centres,
-                                          std::span<const double> radii)
+                                          std::span<const double> radii, double tolerance)
 {
   std::vector<std::uint8_t> on(radii.size(), 0);
   for (std::size_t i = 0; i < radii.size(); ++i)
-    on[i] = std::get<0>(nearest_element(bars, &centres[3 * i],
-                                        [&](std::size_t e) { return radii[i] + bar_radius(bars, e); }))
+    on[i] = std::get<0>(nearest_element(bars, &centres[3 * i], [&](std::size_t e)
+                                        { return radii[i] + bar_radius(bars, e) - tolerance; }))
             >= 0;
   return on;
+}
+
+namespace
+{
+/// The bars' elements by cells of a uniform grid: each element listed in
+/// every cell its box, grown by a reach, touches; a query looks in its own
+/// cell only.
+struct ElementGrid
+{
+  Point lo{};
+  double cell = 0.0;
+  int n[3] = {1, 1, 1};
+  std::vector<std::vector<std::int32_t>> lists;
+  std::int64_t index(const Point& x) const
+  {
+    std::int64_t id = 0;
+    for (int k = 0; k < 3; ++k)
+    {
+      const double f = (x[k] - lo[k]) / cell;
+      if (!(f >= 0.0 && f < n[k]))
+        return -1;
+      id = id * n[k] + static_cast<std::int64_t>(f);
+    }
+    return id;
+  }
+};
+} // namespace
+
+Region region_without_bars(const Region& region, const Bars& bars, double rmax)
+{
+  double rb = 0.0, lmax = 0.0;
+  for (std::size_t e = 0; e < bars.elements(); ++e)
+  {
+    rb = std::max(rb, bar_radius(bars, e));
+    lmax = std::max(lmax, bars.l0[e]);
+  }
+  auto grid = std::make_shared<ElementGrid>();
+  // each cell lists the elements within `reach` of it: elsewhere the bars'
+  // part of the distance is at least reach - rb, past what the packing looks
+  const double reach = 6.0 * rmax + 2.0 * rb;
+  grid->cell = std::max(lmax, 0.25 * reach);
+  for (int k = 0; k < 3; ++k)
+  {
+    grid->lo[k] = region.lo[k] - reach;
+    grid->n[k] = static_cast<int>(std::ceil((region.hi[k] - region.lo[k] + 2.0 * reach) / grid->cell)) + 1;
+  }
+  grid->lists.resize(std::size_t(grid->n[0]) * grid->n[1] * grid->n[2]);
+  for (std::size_t e = 0; e < bars.elements(); ++e)
+  {
+    int c0[3], c1[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      const double a = bars.x[3 * bars.a[e] + k], b = bars.x[3 * bars.b[e] + k];
+      c0[k] = std::max(0, static_cast<int>(std::floor((std::min(a, b) - reach - grid->lo[k]) / grid->cell)));
+      c1[k] = std::min(grid->n[k] - 1, static_cast<int>(std::floor((std::max(a, b) + reach - grid->lo[k]) / grid->cell)));
+    }
+    for (int i = c0[0]; i <= c1[0]; ++i)
+      for (int j = c0[1]; j <= c1[1]; ++j)
+        for (int k = c0[2]; k <= c1[2]; ++k)
+          grid->lists[(std::size_t(i) * grid->n[1] + j) * grid->n[2] + k].push_back(static_cast<std::int32_t>(e));
+  }
+  auto shared = std::make_shared<Bars>(bars);
+  const double far = reach - rb; // no element within this of a cell's point it does not list
+  auto base = region.sdf;
+  auto sdf = [base, grid, shared, far](const Point& x)
+  {
+    double bars_part = far;
+    const std::int64_t id = grid->index(x);
+    if (id >= 0)
+      for (std::int32_t e : grid->lists[id])
+        bars_part = std::min(bars_part, distance_to_element(*shared, e, x.data())[0] - bar_radius(*shared, e));
+    return std::max(base(x), -bars_part);
+  };
+  return sdf_region(region.name + " less the bars", sdf, region.lo, region.hi);
 }
 
 std::size_t create_bonds(Bars& bars, const Particles& p, double reach)

@@ -5,6 +5,61 @@
 
 namespace dembridge::dem
 {
+namespace
+{
+/// The optional tables of format 2: "steel" and "bond" objects, each key
+/// optional (absent: the default of Steel or BondLaw).
+void read_reinforcement_laws(const nlohmann::json& j, const std::filesystem::path& file, MaterialFile& m)
+{
+  auto table = [&](const char* name, std::initializer_list<std::pair<const char*, double*>> keys)
+  {
+    const nlohmann::json& t = j[name];
+    if (!t.is_object())
+      throw std::runtime_error("material file '" + file.string() + "': \"" + name + "\" must be an object");
+    for (const auto& [key, _] : t.items())
+    {
+      bool known = false;
+      for (const auto& [k, v] : keys)
+        known = known || key == k;
+      if (!known)
+        throw std::runtime_error("material file '" + file.string() + "': unknown key '" + name + "." + key + "'");
+    }
+    for (const auto& [key, v] : keys)
+      if (t.contains(key))
+      {
+        if (!t[key].is_number())
+          throw std::runtime_error("material file '" + file.string() + "': '" + name + "." + key + "' is not a number");
+        *v = t[key].get<double>();
+      }
+  };
+  if (j.contains("steel"))
+  {
+    Steel s;
+    table("steel", {{"youngs_modulus_pa", &s.youngs_modulus}, {"density_kg_m3", &s.density},
+                    {"yield_pa", &s.yield}, {"hardening_pa", &s.hardening}, {"rupture_strain", &s.rupture_strain}});
+    m.steel = s;
+  }
+  if (j.contains("bond"))
+  {
+    BondLaw b;
+    table("bond", {{"tau_max_pa", &b.tau_max}, {"s0_m", &b.s0}, {"s1_m", &b.s1}, {"s2_m", &b.s2}, {"s3_m", &b.s3},
+                   {"alpha", &b.alpha}, {"tau_f_ratio", &b.tau_f_ratio}, {"radial_stiffness_pa_m", &b.radial_stiffness},
+                   {"opening_pa", &b.opening}, {"opening_gap_m", &b.opening_gap}});
+    m.bond = b;
+  }
+  try
+  {
+    if (m.steel)
+      m.steel->validate();
+    if (m.bond)
+      m.bond->validate();
+  }
+  catch (const std::exception& e)
+  {
+    throw std::runtime_error("material file '" + file.string() + "': " + e.what());
+  }
+}
+} // namespace
 
 MaterialFile read_material(const std::filesystem::path& file)
 {
@@ -27,9 +82,10 @@ MaterialFile read_material(const std::filesystem::path& file)
                                + key + "'");
     return j[key].get<double>();
   };
-  if (j.value("format", std::string()) != "dembridge-material-1")
-    throw std::runtime_error("material file '" + file.string()
-                             + "': expected \"format\": \"dembridge-material-1\"");
+  const std::string format = j.value("format", std::string());
+  if (format != "dembridge-material-1" && format != "dembridge-material-2")
+    throw std::runtime_error("material file '" + file.string() + "': \"format\": \"" + format
+                             + "\": expected \"dembridge-material-2\" (or -1, without steel and bond)");
   MaterialFile m;
   Material& t = m.material;
   t.youngs_modulus = get("youngs_modulus_pa");
@@ -50,6 +106,8 @@ MaterialFile read_material(const std::filesystem::path& file)
   // optional: compaction (absent: none)
   if (j.contains("compaction_onset"))
     t.compaction = {get("compaction_onset"), get("compaction_stiffness"), get("compaction_lock")};
+  if (format == "dembridge-material-2")
+    read_reinforcement_laws(j, file, m);
   m.lambda = j.value("lambda", 0.0);
   m.macroscopic = j.value("macroscopic", nlohmann::json::object());
   m.calibration = j.value("calibration", nlohmann::json::object());
@@ -68,7 +126,7 @@ void write_material(const std::filesystem::path& file, const MaterialFile& m)
 {
   const Material& t = m.material;
   nlohmann::ordered_json j;
-  j["format"] = "dembridge-material-1";
+  j["format"] = "dembridge-material-2";
   j["youngs_modulus_pa"] = t.youngs_modulus;
   j["poisson_ratio"] = t.poisson_ratio;
   j["density_kg_m3"] = t.density;
@@ -91,6 +149,15 @@ void write_material(const std::filesystem::path& file, const MaterialFile& m)
     j["compaction_stiffness"] = t.compaction.stiffness;
     j["compaction_lock"] = t.compaction.lock;
   }
+  if (m.steel)
+    j["steel"] = {{"youngs_modulus_pa", m.steel->youngs_modulus}, {"density_kg_m3", m.steel->density},
+                  {"yield_pa", m.steel->yield}, {"hardening_pa", m.steel->hardening},
+                  {"rupture_strain", m.steel->rupture_strain}};
+  if (m.bond)
+    j["bond"] = {{"tau_max_pa", m.bond->tau_max}, {"s0_m", m.bond->s0}, {"s1_m", m.bond->s1}, {"s2_m", m.bond->s2},
+                 {"s3_m", m.bond->s3}, {"alpha", m.bond->alpha}, {"tau_f_ratio", m.bond->tau_f_ratio},
+                 {"radial_stiffness_pa_m", m.bond->radial_stiffness}, {"opening_pa", m.bond->opening},
+                 {"opening_gap_m", m.bond->opening_gap}};
   j["lambda"] = m.lambda;
   j["macroscopic"] = m.macroscopic;
   j["calibration"] = m.calibration;

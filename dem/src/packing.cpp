@@ -119,7 +119,7 @@ Csr neighbours(const std::vector<double>& x, const std::vector<double>& r, doubl
 /// < Rmax wherever such a sphere fits (always, for Rmax/Rmin >= 2, on flat
 /// faces: a tangent sphere of radius gap / 2 always fits). Returns the number
 /// of spheres added (appended to p).
-std::size_t fill_boundary(Packing& p, const Region& g, double rmin, double rmax, double h)
+std::size_t fill_uncovered(Packing& p, const Region& g, double rmin, double rmax, double h)
 {
   const double L = 2.0 * rmax, hs = 0.5 * rmin, flat = 1e-9 * L;
   CellGrid grid(p.x, 3.0 * rmax);
@@ -292,6 +292,19 @@ void morton_sort(Packing& p, const Region& g)
   p.r = std::move(r);
 }
 } // namespace
+
+std::size_t fill_boundary(Packing& p, const Region& region, double rmin, double rmax)
+{
+  if (!(rmin > 0.0 && rmax >= rmin))
+    throw std::runtime_error("fill_boundary: radii " + std::to_string(rmin) + ", " + std::to_string(rmax)
+                             + " m: need 0 < rmin <= rmax");
+  const Region& g = region;
+  const double h = 1e-7 * (g.hi[0] - g.lo[0] + g.hi[1] - g.lo[1]);
+  const std::size_t added = fill_uncovered(p, region, rmin, rmax, h);
+  p.filled += added;
+  morton_sort(p, region);
+  return added;
+}
 
 Region box_region(const Point& lo, const Point& hi)
 {
@@ -648,7 +661,7 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
         }
       p.max_overlap = p.max_penetration = 0.0;
       const double r_lo = rmin * std::pow(backoff, p.backoffs);
-      p.filled = fill_boundary(p, g, r_lo, q * r_lo, h);
+      p.filled = fill_uncovered(p, g, r_lo, q * r_lo, h);
       morton_sort(p, g);
       return p;
     }

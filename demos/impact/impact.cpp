@@ -142,6 +142,8 @@ private:
     _lo = {-0.5 * t.size[0], -0.5 * t.size[1], -t.thickness};
     _hi = {0.5 * t.size[0], 0.5 * t.size[1], 0.0};
     const Region region = box_region(_lo, _hi);
+    if (_s.reinforcement.any())
+      make_the_bars();
     if (!t.packing_file.empty())
       _pk = read_target_packing(region);
     else
@@ -154,6 +156,8 @@ private:
         std::cout << "packing the slab (" << fmt(region.volume) << " m^3, mean radius " << t.mean_radius << " m)..."
                   << std::endl;
       _pk = generate_packing(region, po);
+      if (_s.reinforcement.any())
+        line_the_bars(region);
     }
     if (_pk.size() == 0)
       throw std::runtime_error("target: no sphere in the slab (target.mean_radius_m " + fmt(t.mean_radius)
@@ -163,10 +167,11 @@ private:
       solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
     _fraction = solid / region.volume;
     const Material& mat = _s.material.material;
-    // the bars take their room: the spheres they overlap are left out
+    // the bars take their room: the spheres they overlap are left out (none
+    // of a packing generated around them, beyond its tolerance)
     std::vector<double> x = _pk.x, r = _pk.r;
     if (_s.reinforcement.any())
-      lay_bars(x, r);
+      clear_bars(x, r);
     _p = make_particles(x, r, mat.density, _fraction);
     const auto bulk = bulk_spheres(region, _p.x, _p.r);
     _lambda = lambda_for_mean_links(_p.x, _p.r, _s.material.links_per_sphere, bulk);
@@ -184,12 +189,12 @@ private:
     }
   }
 
-  /// The bars (make_bars) and the spheres of the packing that overlap
-  /// none of them (x, r reduced to those).
-  void lay_bars(std::vector<double>& x, std::vector<double>& r)
+  /// The bars of the scenario (make_bars), their elements at most
+  /// element_length_m long (0: the mean sphere diameter).
+  void make_the_bars()
   {
     const ReinforcementSpec& b = _s.reinforcement;
-    const double h = b.element_length > 0.0 ? b.element_length : 2.0 * mean(r);
+    const double h = b.element_length > 0.0 ? b.element_length : 2.0 * _s.target.mean_radius;
     try
     {
       _bars = make_bars(bar_lines(_s), {b.steel}, {b.bond}, h);
@@ -198,7 +203,37 @@ private:
     {
       throw std::runtime_error(std::string("reinforcement: ") + e.what());
     }
-    const auto on = spheres_on_bars(_bars, x, r);
+  }
+
+  /// A generated packing around the bars: the spheres on them removed, and
+  /// the bars' surfaces lined with spheres tangent to them (fill_boundary),
+  /// so that no void is left beside a bar.
+  void line_the_bars(const Region& region)
+  {
+    const auto on = spheres_on_bars(_bars, _pk.x, _pk.r);
+    Packing kept;
+    for (std::size_t i = 0; i < _pk.size(); ++i)
+      if (!on[i])
+      {
+        kept.x.insert(kept.x.end(), &_pk.x[3 * i], &_pk.x[3 * i + 3]);
+        kept.r.push_back(_pk.r[i]);
+      }
+    const double rmin = *std::min_element(_pk.r.begin(), _pk.r.end());
+    const double rmax = *std::max_element(_pk.r.begin(), _pk.r.end());
+    const std::size_t removed = _pk.size() - kept.size();
+    const std::size_t added = fill_boundary(kept, region_without_bars(region, _bars, rmax), rmin, rmax);
+    if (!_cfg.quiet)
+      std::cout << "the bars' room: " << removed << " spheres removed, " << added << " added against the bars"
+                << std::endl;
+    _pk = std::move(kept);
+  }
+
+  /// Leaves out the spheres (x, r) that overlap a bar by more than the
+  /// packing's tolerance (1e-3 of the smallest radius).
+  void clear_bars(std::vector<double>& x, std::vector<double>& r)
+  {
+    const double rmin = *std::min_element(r.begin(), r.end());
+    const auto on = spheres_on_bars(_bars, x, r, 1e-3 * rmin);
     std::size_t kept = 0;
     for (std::size_t i = 0; i < r.size(); ++i)
       if (!on[i])

@@ -351,6 +351,8 @@ MaterialSpec read_material_section(Reader& r, const std::filesystem::path& scena
   m.links_per_sphere = r.number("links_per_sphere", f.links_per_sphere, Allowed::positive(100.0),
                                 "mean links per sphere in the bulk (sets lambda) [-]");
   m.material = c; // validated once every key is known (read_scenario)
+  m.steel = f.steel;
+  m.bond = f.bond;
   return m;
 }
 
@@ -374,10 +376,15 @@ TargetSpec read_target(Reader& r)
   return t;
 }
 
-ReinforcementSpec read_reinforcement(Reader& r)
+ReinforcementSpec read_reinforcement(Reader& r, const MaterialSpec& m)
 {
-  r.section("reinforcement", "steel bars in the slab, bonded to the concrete (docs/method.md 1.15)");
+  r.section("reinforcement", "steel bars in the slab, bonded to the concrete (docs/method.md 1.15); the steel and "
+                             "bond default to the material file's, if it has them");
   ReinforcementSpec b;
+  if (m.steel)
+    b.steel = *m.steel;
+  if (m.bond)
+    b.bond = *m.bond;
   b.layers = static_cast<int>(r.integer("layers", b.layers, Allowed::closed(0, 100),
                                         "mats of bars along x and y, spread through the thickness (one: at the "
                                         "rear face); 0 = none"));
@@ -473,7 +480,7 @@ Scenario read_sections(Reader& r, const std::filesystem::path& file)
   s.name = r.text("name", "impact", "", "the case's name (in the summary and plots)");
   s.material = read_material_section(r, file);
   s.target = read_target(r);
-  s.reinforcement = read_reinforcement(r);
+  s.reinforcement = read_reinforcement(r, s.material);
   s.projectile = read_projectile(r);
   s.run = read_run(r);
   s.resolved = r.resolved();

@@ -14,6 +14,7 @@
 #include <array>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,8 @@ struct MaterialSpec
   std::string file;              ///< resolved path of the material file
   dem::Material material;        ///< its values, with the overrides
   double links_per_sphere = 12.0;
+  std::optional<dem::Steel> steel;   ///< the file's steel, if it has one
+  std::optional<dem::BondLaw> bond;  ///< the file's bond law, if it has one
 };
 
 /// A rectangular slab: x, y in [-size/2, size/2], z in [-thickness, 0] (the

@@ -9,6 +9,7 @@
 /// Structure of arrays; the laws are pure functions.
 
 #include "dembridge/dem/assembly.h"
+#include "dembridge/dem/packing.h"
 
 #include <array>
 #include <cstdint>
@@ -145,10 +146,19 @@ Bars make_bars(std::span<const BarLine> lines, std::vector<Steel> steels,
 std::array<double, 2> distance_to_element(const Bars& bars, std::size_t e, const double* x);
 
 /// 1 for each sphere (centre c, radius r) that overlaps a bar: closer to an
-/// axis than r + the bar's radius. A packing drops them to leave the bars
-/// room.
+/// axis than r + the bar's radius - tolerance. A packing drops them to leave
+/// the bars room.
 std::vector<std::uint8_t> spheres_on_bars(const Bars& bars, std::span<const double> centres,
-                                          std::span<const double> radii);
+                                          std::span<const double> radii, double tolerance = 0.0);
+
+/// The region less the bars' cylinders, for generate_packing: its signed
+/// distance is max(region's, -(distance to the nearest axis - bar radius)),
+/// the bars found through a grid of cells; farther than 6 rmax + the bar
+/// radius from every bar (rmax: the packing's largest radius), the bars'
+/// part is a lower bound of at least 6 rmax, which no packing step looks
+/// past. For fill_boundary (packing.h) after the spheres on the bars are
+/// removed: the spheres it adds line the bars.
+Region region_without_bars(const Region& region, const Bars& bars, double rmax);
 
 /// Bonds every sphere whose surface lies within `reach` of a bar's surface
 /// (centre closer to the axis than radius + bar radius + reach) to the

@@ -4,7 +4,7 @@
 /// every demo reads with --material FILE. Format (SI units, angles in degrees):
 ///
 ///     {
-///       "format": "dembridge-material-1",
+///       "format": "dembridge-material-2",   (-1: the same without steel and bond)
 ///       "youngs_modulus_pa": 3.0e10,      E in equation [1]
 ///       "poisson_ratio": 0.2,             nu in equation [1]
 ///       "density_kg_m3": 2400,            bulk density of the concrete
@@ -18,15 +18,24 @@
 ///       "compaction_onset": 0.004,        optional, with the next two: compaction (1.6c)
 ///       "compaction_stiffness": 0.3,
 ///       "compaction_lock": 0.04,
+///       "steel": {...},                   optional: the bars' steel (bars.h: Steel), keys
+///                                         youngs_modulus_pa, density_kg_m3, yield_pa,
+///                                         hardening_pa, rupture_strain, each optional
+///       "bond": {...},                    optional: the bar-concrete bond (BondLaw), keys
+///                                         tau_max_pa, s0_m, s1_m, s2_m, s3_m, alpha,
+///                                         tau_f_ratio, radial_stiffness_pa_m, opening_pa,
+///                                         opening_gap_m, each optional
 ///       "lambda": 1.49,                   lambda on the calibration packing (information)
 ///       "macroscopic": {...},             what the parameters reproduce (information)
 ///       "calibration": {...}              how they were obtained (information)
 ///     }
 
 #include "dembridge/dem/assembly.h"
+#include "dembridge/dem/bars.h"
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 namespace dembridge::dem
 {
@@ -35,6 +44,8 @@ struct MaterialFile
 {
   Material material;
   double links_per_sphere = 12.0;
+  std::optional<Steel> steel;   ///< the bars' steel, if the file gives it (format 2)
+  std::optional<BondLaw> bond;  ///< the bars' bond, if the file gives it (format 2)
   double lambda = 0.0;          ///< 0 if not given
   nlohmann::json macroscopic;   ///< free-form information
   nlohmann::json calibration;   ///< free-form information

@@ -94,6 +94,15 @@ struct Packing
   std::size_t size() const { return r.size(); }
 };
 
+/// The fill step of generate_packing on its own: wherever the boundary of
+/// `region` is left uncovered (a point of it farther than 0.75 rmax from
+/// every sphere), adds the largest sphere of radius in [rmin, rmax] tangent
+/// to it there that overlaps nothing, then renumbers the packing along its
+/// Morton curve. For a packing whose region gained holes after it was made
+/// (bars: the spheres on them removed, bars.h): the spheres added line the
+/// holes. Returns the number added (also added to p.filled).
+std::size_t fill_boundary(Packing& p, const Region& region, double rmin, double rmax);
+
 /// Generates a packing. @throws std::runtime_error on bad options (radius
 /// ratio outside [1, 3], radius <= 0, fraction outside (0, 0.74)) or if it
 /// does not converge in max_sweeps (the message gives the overlap reached).
