@@ -167,6 +167,8 @@ Bars make_bars(std::span<const BarLine> lines, std::vector<Steel> steels,
       }
       bars.m.push_back(0.0);
       bars.held.push_back(0);
+      bars.node_radius.push_back(0.5 * line.diameter);
+      bars.node_k.push_back(st.youngs_modulus * std::numbers::pi * 0.5 * line.diameter);
       return static_cast<std::int32_t>(bars.m.size() - 1);
     };
     std::int32_t prev = add_node(line.points[0]);
@@ -637,6 +639,43 @@ BarEnergy bar_energy(const Bars& bars, const Particles& p)
   return en;
 }
 
+void bar_body_forces(Bars& bars, RigidBody& b)
+{
+  for (std::size_t n = 0; n < bars.nodes(); ++n)
+  {
+    const std::array<double, 3> x{bars.x[3 * n], bars.x[3 * n + 1], bars.x[3 * n + 2]};
+    const Distance D = signed_distance(b.shape, b.to_body(x));
+    const double delta = bars.node_radius[n] - D.d;
+    if (!(delta > 0.0))
+      continue;
+    const std::array<double, 3> nb = b.to_world({D.n[0], D.n[1], D.n[2]}), o = b.to_world({0.0, 0.0, 0.0});
+    const double F = bars.node_k[n] * delta;
+    double f[3], r[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      f[k] = F * (nb[k] - o[k]); // the normal turned to the world
+      bars.f[3 * n + k] += f[k];
+      b.f[k] -= f[k];
+      r[k] = x[k] - bars.node_radius[n] * (nb[k] - o[k]) - b.x[k]; // the contact point from the centre of mass
+    }
+    b.t[0] -= r[1] * f[2] - r[2] * f[1];
+    b.t[1] -= r[2] * f[0] - r[0] * f[2];
+    b.t[2] -= r[0] * f[1] - r[1] * f[0];
+  }
+}
+
+double bar_body_energy(const Bars& bars, const RigidBody& b)
+{
+  double e = 0.0;
+  for (std::size_t n = 0; n < bars.nodes(); ++n)
+  {
+    const Distance D = signed_distance(b.shape, b.to_body({bars.x[3 * n], bars.x[3 * n + 1], bars.x[3 * n + 2]}));
+    const double delta = std::max(0.0, bars.node_radius[n] - D.d);
+    e += 0.5 * bars.node_k[n] * delta * delta;
+  }
+  return e;
+}
+
 void add_bar_rows(const Bars& bars, const Particles& p, std::vector<double>& sphere_rows,
                   std::vector<double>& node_rows)
 {
@@ -645,6 +684,8 @@ void add_bar_rows(const Bars& bars, const Particles& p, std::vector<double>& sph
   // point (1 - xi) A + xi B with k = max(K0, k_r) S (the lever terms of the
   // bond's forces, offsets over element lengths, are left out).
   node_rows.assign(bars.nodes(), 0.0);
+  for (std::size_t n = 0; n < bars.nodes(); ++n)
+    node_rows[n] += bars.node_k[n] / bars.m[n]; // a body's contact (its mass far above)
   for (std::size_t e = 0; e < bars.elements(); ++e)
   {
     if (bars.broken[e])

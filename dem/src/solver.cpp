@@ -174,7 +174,11 @@ void DemSolver::start()
   compute_forces(_p, _l, _nl, _mat, 0.0, _counters, *_scratch);
   contact_bodies(0.0);
   if (_has_bars)
+  {
     bar_forces(_bars, _p, false);
+    for (auto& b : _bodies)
+      bar_body_forces(_bars, b);
+  }
   if (!_forces.empty())
     external(_forces, _t, _fext);
   _e = DemEnergy{};
@@ -463,6 +467,8 @@ void DemSolver::end_step()
     const BarWork bw = bar_forces(_bars, _p, true, _removed);
     _e.bar_slip += bw.slip;
     _e.bar_broken += bw.broken;
+    for (auto& b : _bodies)
+      bar_body_forces(_bars, b);
   }
   const double t4 = omp_get_wtime();
   _time.neighbours += t2 - t1;
@@ -557,6 +563,8 @@ DemEnergy DemSolver::energy() const
   {
     e.body_kinetic += _bodies[k].kinetic_energy();
     e.body_contact += body_contact_energy(_p, _bodies[k], _contacts[k], _mat);
+    if (_has_bars)
+      e.body_contact += bar_body_energy(_bars, _bodies[k]);
     e.body_friction += _contacts[k].friction_work;
   }
   const BarEnergy be = bar_energy(_bars, _p);

@@ -9,6 +9,7 @@
 /// Structure of arrays; the laws are pure functions.
 
 #include "dembridge/dem/assembly.h"
+#include "dembridge/dem/body.h"
 #include "dembridge/dem/packing.h"
 
 #include <array>
@@ -109,6 +110,7 @@ struct Bars
   // nodes: (n, 3) row-major
   std::vector<double> x, x0, v, f, m;
   std::vector<std::uint8_t> held; ///< 1: the node keeps its velocity (a prescribed motion)
+  std::vector<double> node_radius, node_k; ///< a node's bar radius [m] and its body-contact stiffness [N/m]
   // elements
   std::vector<std::int32_t> a, b, line;   ///< end nodes; the polyline it belongs to
   std::vector<double> area, l0;           ///< cross-section [m^2], rest length [m]
@@ -194,9 +196,21 @@ struct BarWork
 /// is flagged in `gone` (removed from the computation; may be empty) opens.
 BarWork bar_forces(Bars& bars, Particles& p, bool advance, std::span<const std::uint8_t> gone = {});
 
+/// The contact of the bar nodes with a rigid body (body.h): a node is a
+/// sphere of its bar's radius r, its overlap delta = r - phi(x) gives the
+/// normal force K delta along the body's outward normal, K = E_s pi r (the
+/// sphere-wall stiffness of body.h with the steel's modulus); frictionless.
+/// The body takes the opposite force and its moment about its centre of
+/// mass. Adds to bars.f and to b.f, b.t (call after body_forces and
+/// bar_forces, which reset them).
+void bar_body_forces(Bars& bars, RigidBody& b);
+/// The elastic energy of those contacts, K delta^2 / 2 summed [J].
+double bar_body_energy(const Bars& bars, const RigidBody& b);
+
 /// Adds the bars' Gershgorin rows (of M^-1/2 K M^-1/2, [1/s^2]) to the
 /// spheres' translation rows (their bonds) and fills the nodes' (elements
-/// and bonds): critical_time_step(p, l, m, bars) takes 2 / sqrt(largest).
+/// and bonds, and one body contact per node): critical_time_step(p, l, m,
+/// bars) takes 2 / sqrt(largest).
 void add_bar_rows(const Bars& bars, const Particles& p, std::vector<double>& sphere_rows,
                   std::vector<double>& node_rows);
 
