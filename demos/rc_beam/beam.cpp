@@ -1,0 +1,351 @@
+#include "beam.h"
+#include "support.h"
+
+#include "dembridge/dem/output.h"
+#include "dembridge/dem/packing.h"
+#include "dembridge/dem/solver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <numbers>
+#include <stdexcept>
+
+namespace dembridge::demo
+{
+using namespace dembridge::dem;
+constexpr double pi = std::numbers::pi;
+
+namespace
+{
+double steel_area(const BeamConfig& c) { return c.bars * pi * c.bar_diameter * c.bar_diameter / 4.0; }
+} // namespace
+
+BeamTheory beam_theory(const BeamConfig& c)
+{
+  BeamTheory t;
+  const double b = c.width, h = c.height, E = c.concrete_modulus, As = steel_area(c);
+  t.n = c.steel.youngs_modulus / E;
+  t.d = h - c.cover;
+  // uncracked: the bars as (n - 1) A_s in place of concrete
+  const double A = b * h + (t.n - 1.0) * As;
+  t.y_uncracked = (b * h * h / 2.0 + (t.n - 1.0) * As * t.d) / A;
+  t.i_uncracked = b * h * h * h / 12.0 + b * h * std::pow(h / 2.0 - t.y_uncracked, 2)
+                  + (t.n - 1.0) * As * std::pow(t.d - t.y_uncracked, 2);
+  // the flexural tensile strength of Eurocode 2 and fib MC2010,
+  // f_ct,fl = max((1.6 - h / 1 m) f_ct, f_ct): a bending crack starts at
+  // a higher stress than a tensile one, the more so the shallower the beam
+  t.f_ct_fl = std::max(1.6 - h, 1.0) * c.tensile_strength;
+  t.m_cracking = t.f_ct_fl * t.i_uncracked / (h - t.y_uncracked);
+  // cracked: b c^2 / 2 = n A_s (d - c)
+  const double nA = t.n * As;
+  t.c_cracked = (-nA + std::sqrt(nA * nA + 2.0 * b * nA * t.d)) / b;
+  t.i_cracked = b * std::pow(t.c_cracked, 3) / 3.0 + nA * std::pow(t.d - t.c_cracked, 2);
+  t.m_yield = As * c.steel.yield * (t.d - t.c_cracked / 3.0);
+  t.p_cracking = 4.0 * t.m_cracking / c.span;
+  t.p_yield = 4.0 * t.m_yield / c.span;
+  return t;
+}
+
+double BeamTheory::deflection(const BeamConfig& c, double P) const
+{
+  // delta = 2 int_0^{L/2} M m / (E I) dx, M = P x / 2, m = x / 2; cracked
+  // where P x / 2 > M_cr, that is beyond x_cr = 2 M_cr / P
+  const double E = c.concrete_modulus, half = c.span / 2.0;
+  const double xc = P > 0.0 ? std::min(half, 2.0 * m_cracking / P) : half;
+  const double bending = P / (2.0 * E)
+                         * (xc * xc * xc / (3.0 * i_uncracked) + (half * half * half - xc * xc * xc) / (3.0 * i_cracked));
+  const double G = E / (2.0 * (1.0 + c.material.poisson_ratio));
+  return bending + P * c.span / (4.0 * 5.0 / 6.0 * G * c.width * c.height);
+}
+
+namespace
+{
+/// Least-squares slope of y against x over the points with lo <= y <= hi.
+double slope(const std::vector<double>& x, const std::vector<double>& y, double lo, double hi)
+{
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  int n = 0;
+  for (std::size_t k = 0; k < x.size(); ++k)
+    if (y[k] >= lo && y[k] <= hi)
+    {
+      sx += x[k];
+      sy += y[k];
+      sxx += x[k] * x[k];
+      sxy += x[k] * y[k];
+      ++n;
+    }
+  if (n < 3)
+    return 0.0;
+  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+}
+
+class BeamRun
+{
+public:
+  explicit BeamRun(const BeamConfig& c) : _c(c), _t(beam_theory(c)) {}
+
+  nlohmann::json run()
+  {
+    build();
+    set_up();
+    loop();
+    report();
+    return _out;
+  }
+
+private:
+  void build()
+  {
+    const double L = _c.span / 2.0 + _c.overhang;
+    const Region region = box_region({-L, -_c.width / 2.0, 0.0}, {L, _c.width / 2.0, _c.height});
+    // the bars along the beam, evenly across its width, 10 mm short of its ends
+    std::vector<BarLine> lines;
+    for (int k = 0; k < _c.bars; ++k)
+    {
+      const double y = -_c.width / 2.0 + _c.width * (k + 0.5) / _c.bars;
+      lines.push_back({{{-L + 0.01, y, _c.cover}, {L - 0.01, y, _c.cover}}, _c.bar_diameter, 0, 0});
+    }
+    _bars = make_bars(lines, {_c.steel}, {_c.bond}, 2.0 * _c.mean_radius);
+    PackingOptions po;
+    po.mean_radius = _c.mean_radius;
+    po.radius_ratio = _c.radius_ratio;
+    po.seed = _c.seed;
+    Packing pk = generate_packing(region, po);
+    const auto on = spheres_on_bars(_bars, pk.x, pk.r);
+    Packing kept;
+    for (std::size_t i = 0; i < pk.size(); ++i)
+      if (!on[i])
+      {
+        kept.x.insert(kept.x.end(), &pk.x[3 * i], &pk.x[3 * i + 3]);
+        kept.r.push_back(pk.r[i]);
+      }
+    const double rmin = *std::min_element(pk.r.begin(), pk.r.end());
+    _rmax = *std::max_element(pk.r.begin(), pk.r.end());
+    fill_boundary(kept, region_without_bars(region, _bars, _rmax), rmin, _rmax);
+    double solid = 0.0;
+    for (double r : pk.r)
+      solid += 4.0 / 3.0 * pi * r * r * r;
+    _p = make_particles(kept.x, kept.r, _c.material.density, solid / region.volume);
+    _links = create_links(_p, lambda_for_bulk_links(region, _p.x, _p.r, _c.links_per_sphere), _c.material);
+    _bonds = create_bonds(_bars, _p, 0.5 * _c.mean_radius);
+  }
+
+  void set_up()
+  {
+    const double E = _c.concrete_modulus, rho = _c.material.density;
+    const double I = _c.width * std::pow(_c.height, 3) / 12.0, A = _c.width * _c.height;
+    const double w1 = std::pow(pi / _c.span, 2) * std::sqrt(E * I / (rho * A));
+    _damping = _c.damping > 0.0 ? _c.damping : 0.1 * w1;
+    _ramp = _c.ramp_time > 0.0 ? _c.ramp_time : 4.0 * 2.0 * pi / w1;
+    _target = _c.deflection > 0.0 ? _c.deflection : 2.0 * _t.deflection(_c, _t.p_yield);
+    _dt = _c.safety * critical_time_step(_p, _links, _c.material, _bars);
+    _solver = std::make_unique<DemSolver>(_p, _links, _c.material, _dt, _damping, 0.5 * _c.mean_radius / 2.0);
+    const double band = 1.5 * _rmax, half = _c.span / 2.0, top = _c.height;
+    auto at_support = [&](double xs) { return [=](const Point& x) { return x[2] < band && std::abs(x[0] - xs) < band; }; };
+    _left = DemSolver::select(_p, at_support(-half), "the left support's spheres");
+    _right = DemSolver::select(_p, at_support(half), "the right support's spheres");
+    _plate = DemSolver::select(_p, [&](const Point& x) { return x[2] > top - band && std::abs(x[0]) < band; },
+                               "the loading plate's spheres");
+    _gauge = DemSolver::select(_p, [&](const Point& x) { return x[2] < band && std::abs(x[0]) < band; },
+                               "the midspan gauge's spheres");
+    auto zero = [](double) { return 0.0; };
+    _solver->add_motion({"left", _left, MotionKind::velocity, {true, true, true}, zero});
+    _solver->add_motion({"right", _right, MotionKind::velocity, {false, true, true}, zero});
+    const double v = _c.speed, ramp = _ramp;
+    _solver->add_motion({"plate", _plate, MotionKind::velocity, {false, false, true},
+                         [=](double t) { return -v * std::min(1.0, t / ramp); }});
+    _solver->add_bars(_bars);
+    _solver->start();
+    describe();
+  }
+
+  void describe()
+  {
+    _out["particles"] = _p.size();
+    _out["links"] = _links.size();
+    _out["bar_elements"] = _bars.elements();
+    _out["bonds"] = _bonds;
+    _out["dt_s"] = _dt;
+    _out["damping_1_s"] = _damping;
+    _out["ramp_time_s"] = _ramp;
+    _out["target_deflection_m"] = _target;
+    _out["theory"] = {{"modular_ratio", _t.n},
+                      {"bar_depth_m", _t.d},
+                      {"i_uncracked_m4", _t.i_uncracked},
+                      {"i_cracked_m4", _t.i_cracked},
+                      {"neutral_axis_cracked_m", _t.c_cracked},
+                      {"flexural_tensile_strength_pa", _t.f_ct_fl},
+                      {"cracking_moment_n_m", _t.m_cracking},
+                      {"cracking_load_n", _t.p_cracking},
+                      {"yield_moment_n_m", _t.m_yield},
+                      {"yield_load_n", _t.p_yield}};
+    if (_c.quiet)
+      return;
+    std::cout << "# " << _p.size() << " spheres, " << _links.size() << " links, " << _bars.elements()
+              << " bar elements, " << _bonds << " bonds; dt " << _dt << " s, damping " << _damping
+              << " /s, ramp " << _ramp << " s\n# theory: cracking load " << _t.p_cracking << " N, first yield "
+              << _t.p_yield << " N; loading to " << _target << " m\n"
+              << "      time [s]  deflection [m]  load [N]  broken links  bar stress max [Pa]\n";
+  }
+
+  double deflection() const
+  {
+    double s = 0.0;
+    for (auto i : _gauge)
+      s += _p.x[3 * i + 2] - _p.x0[3 * i + 2];
+    return -s / _gauge.size();
+  }
+  /// The plate's push on the beam, downwards > 0 [N].
+  double load() const { return -_solver->reaction("plate")[2]; }
+  double bar_stress() const
+  {
+    double s = 0.0;
+    for (std::size_t e = 0; e < _solver->bars().elements(); ++e)
+      s = std::max(s, _solver->bars().force[e] / _solver->bars().area[e]);
+    return s;
+  }
+  std::size_t broken() const
+  {
+    return _links.count(LinkState::broken_tension) + _links.count(LinkState::broken_shear);
+  }
+
+  void loop()
+  {
+    std::unique_ptr<ParticleWriter> pw;
+    std::unique_ptr<BarWriter> bw;
+    std::ofstream csv;
+    const std::filesystem::path dir = _c.output_dir;
+    if (!_c.output_dir.empty())
+    {
+      std::filesystem::create_directories(dir);
+      pw = std::make_unique<ParticleWriter>(dir / "particles.xdmf", _links, _p.size(), true);
+      bw = std::make_unique<BarWriter>(dir / "bars.xdmf", _solver->bars());
+      csv.open(dir / "load_deflection.csv");
+      csv << "time_s,deflection_m,load_n,links_broken,bar_stress_max_pa\n";
+    }
+    const double t_end = _ramp / 2.0 + _target / _c.speed;
+    const auto steps = static_cast<std::int64_t>(t_end / _dt);
+    const std::int64_t every = std::max<std::int64_t>(1, steps / 1000), frame = std::max<std::int64_t>(1, steps / _c.frames);
+    Stopwatch clock;
+    double last = -1e9;
+    while (deflection() < _target && _solver->steps() < 2 * steps)
+    {
+      _solver->step();
+      const std::int64_t s = _solver->steps();
+      if (pw && s % frame == 0)
+      {
+        pw->write(_solver->time(), _p, _links);
+        bw->write(_solver->time(), _solver->bars());
+      }
+      check_stop(_solver->time());
+      if (s % every != 0 && (_c.quiet || clock.seconds() - last <= 2.0))
+        continue;
+      const double stress = bar_stress();
+      if (_p_yield_model == 0.0 && stress >= _c.steel.yield)
+      {
+        _p_yield_model = load();
+        _d_yield_model = deflection();
+      }
+      if (s % every == 0)
+      {
+        _delta.push_back(deflection());
+        _load.push_back(load());
+        if (csv.is_open())
+          csv << std::setprecision(10) << _solver->time() << "," << _delta.back() << "," << _load.back() << ","
+              << broken() << "," << stress << "\n";
+      }
+      if (!_c.quiet && clock.seconds() - last > 2.0)
+      {
+        std::cout << std::setw(14) << _solver->time() << std::setw(16) << deflection() << std::setw(10) << load()
+                  << std::setw(14) << broken() << std::setw(21) << stress << std::endl;
+        last = clock.seconds();
+      }
+    }
+    if (pw)
+    {
+      pw->write(_solver->time(), _p, _links);
+      bw->write(_solver->time(), _solver->bars());
+    }
+  }
+
+  void report()
+  {
+    // initial stiffness: over 10-50 % of the theory's cracking load;
+    // cracking: the first point past 30 % of it whose secant falls below
+    // 90 % of the initial stiffness; cracked stiffness: the secant from
+    // cracking to first yield (the theory's likewise, between its own
+    // cracking and first-yield points)
+    const double k0 = slope(_delta, _load, 0.1 * _t.p_cracking, 0.5 * _t.p_cracking);
+    double p_cr = 0.0, d_cr = 0.0;
+    for (std::size_t k = 0; k < _load.size(); ++k)
+      if (_load[k] > 0.3 * _t.p_cracking && _delta[k] > 0.0 && _load[k] / _delta[k] < 0.9 * k0)
+      {
+        p_cr = _load[k];
+        d_cr = _delta[k];
+        break;
+      }
+    const double k_cr = _d_yield_model > d_cr && p_cr > 0.0 ? (_p_yield_model - p_cr) / (_d_yield_model - d_cr) : 0.0;
+    const double k_cr_theory =
+        (_t.p_yield - _t.p_cracking) / (_t.deflection(_c, _t.p_yield) - _t.deflection(_c, _t.p_cracking));
+    const double k0_theory = 0.1 * _t.p_cracking / _t.deflection(_c, 0.1 * _t.p_cracking);
+    const double G = _c.concrete_modulus / (2.0 * (1.0 + _c.material.poisson_ratio));
+    const double k_fully_cracked = 1.0 / (std::pow(_c.span, 3) / (48.0 * _c.concrete_modulus * _t.i_cracked)
+                                          + _c.span / (4.0 * 5.0 / 6.0 * G * _c.width * _c.height));
+    auto rel = [](double a, double b) { return b != 0.0 ? a / b - 1.0 : 0.0; };
+    _out["initial_stiffness_n_m"] = k0;
+    _out["initial_stiffness_theory_n_m"] = k0_theory;
+    _out["cracking_load_n"] = p_cr;
+    _out["cracking_deflection_m"] = d_cr;
+    _out["cracked_stiffness_n_m"] = k_cr;
+    _out["cracked_stiffness_theory_n_m"] = k_cr_theory;
+    _out["fully_cracked_stiffness_theory_n_m"] = k_fully_cracked;
+    _out["yield_load_n"] = _p_yield_model;
+    _out["yield_deflection_m"] = _d_yield_model;
+    _out["relative_error"] = {{"initial_stiffness", rel(k0, k0_theory)},
+                              {"cracking_load", rel(p_cr, _t.p_cracking)},
+                              {"cracked_stiffness", rel(k_cr, k_cr_theory)},
+                              {"yield_load", rel(_p_yield_model, _t.p_yield)}};
+    _out["final_deflection_m"] = deflection();
+    _out["final_load_n"] = load();
+    _out["links_broken"] = broken();
+    _out["steps"] = _solver->steps();
+    const auto e = _solver->energy();
+    _out["energy"] = {{"prescribed_work_j", e.prescribed_work}, {"bar_plastic_j", e.bar_plastic},
+                      {"bond_slip_j", e.bar_slip}, {"breakage_j", e.breakage}, {"softening_j", e.softening},
+                      {"damping_j", e.damping}, {"imbalance_j", e.imbalance()}};
+  }
+
+  const BeamConfig& _c;
+  BeamTheory _t;
+  nlohmann::json _out;
+  Bars _bars;
+  Particles _p;
+  Links _links;
+  std::size_t _bonds = 0;
+  double _rmax = 0.0, _dt = 0.0, _damping = 0.0, _ramp = 0.0, _target = 0.0, _p_yield_model = 0.0,
+         _d_yield_model = 0.0;
+  std::vector<std::int32_t> _left, _right, _plate, _gauge;
+  std::unique_ptr<DemSolver> _solver;
+  std::vector<double> _delta, _load;
+};
+} // namespace
+
+nlohmann::json run_beam(const BeamConfig& c)
+{
+  if (!(c.cover > 0.5 * c.bar_diameter && c.cover < c.height - 0.5 * c.bar_diameter))
+    throw std::runtime_error("--cover " + std::to_string(c.cover) + " m: the bars' axes must lie more than their radius "
+                             + std::to_string(0.5 * c.bar_diameter) + " m inside the beam (height "
+                             + std::to_string(c.height) + " m)");
+  if (!(c.width / c.bars > c.bar_diameter))
+    throw std::runtime_error("--bars " + std::to_string(c.bars) + " of " + std::to_string(c.bar_diameter)
+                             + " m do not fit side by side in the width " + std::to_string(c.width) + " m");
+  Stopwatch clock;
+  auto out = BeamRun(c).run();
+  out["wall_s"] = clock.seconds();
+  return out;
+}
+
+} // namespace dembridge::demo

@@ -1,0 +1,69 @@
+#pragma once
+/// @file beam.h
+/// A reinforced-concrete beam of DE concrete with steel bars in quasi-static
+/// three-point bending (docs/validation.md section 2.10): the load against
+/// the midspan deflection, the cracking load, the cracked stiffness and the
+/// first yield of the bars, beside the values of reinforced-concrete section
+/// theory.
+
+#include "dembridge/dem/assembly.h"
+#include "dembridge/dem/bars.h"
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace dembridge::demo
+{
+
+struct BeamConfig
+{
+  double span = 0.6;          ///< between the supports [m]
+  double overhang = 0.025;    ///< beyond each support [m]
+  double height = 0.1;        ///< [m]
+  double width = 0.1;         ///< [m]
+  int bars = 2;               ///< bars at the bottom, along the beam
+  double bar_diameter = 6e-3; ///< [m]
+  double cover = 0.02;        ///< bottom face to the bars' axes [m]
+  dem::Steel steel;
+  dem::BondLaw bond;
+  dem::Material material;
+  double links_per_sphere = 12.0;
+  double tensile_strength = 0.0; ///< the concrete's macroscopic sigma_t for the theory [Pa] (the material file's)
+  double concrete_modulus = 0.0; ///< its macroscopic E for the theory [Pa] (the material file's)
+  double mean_radius = 5e-3;  ///< [m]
+  double radius_ratio = 2.0;
+  unsigned seed = 1;
+  double deflection = 0.0;    ///< midspan deflection to reach [m]; 0 = 2 x the theory's at first yield
+  double speed = 0.1;         ///< the loading plate's speed [m/s] (reached over ramp_time)
+  double ramp_time = 0.0;     ///< [s]; 0 = 4 periods of the first bending mode
+  double damping = 0.0;       ///< [1/s]; 0 = 0.1 x the first bending mode's circular frequency
+  double safety = 0.5;        ///< fraction of the critical time step
+  int frames = 20;
+  std::string output_dir;     ///< "" = no files
+  bool quiet = false;
+};
+
+/// Section theory of the beam (transformed sections, n = E_s / E):
+/// uncracked (bars as n - 1 times their area) and fully cracked (concrete
+/// in tension ignored) second moments, the cracking moment f_ct,fl I / y_t
+/// (the flexural tensile strength of EC2 / MC2010, max(1.6 - h[m], 1) sigma_t),
+/// the first-yield moment A_s f_y (d - c / 3), and the deflection at a
+/// midspan load P, integrating the curvature M / (E I) with I uncracked
+/// where |M| < M_cr and cracked elsewhere, plus the shear deflection
+/// P L / (4 kappa G A).
+struct BeamTheory
+{
+  double n = 0.0, d = 0.0;                 ///< modular ratio; depth of the bars [m]
+  double i_uncracked = 0.0, y_uncracked = 0.0; ///< [m^4]; neutral axis from the top [m]
+  double i_cracked = 0.0, c_cracked = 0.0;   ///< [m^4]; neutral axis from the top [m]
+  double f_ct_fl = 0.0;                      ///< flexural tensile strength [Pa]
+  double m_cracking = 0.0, p_cracking = 0.0; ///< [N m], [N]
+  double m_yield = 0.0, p_yield = 0.0;       ///< [N m], [N]
+  double deflection(const BeamConfig& c, double load) const; ///< [m]
+};
+BeamTheory beam_theory(const BeamConfig& c);
+
+/// Runs the beam; returns the summary (docs/demos.md, rc_beam).
+nlohmann::json run_beam(const BeamConfig& c);
+
+} // namespace dembridge::demo
