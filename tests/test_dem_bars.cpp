@@ -211,7 +211,7 @@ TEST_CASE("bar objectivity: the axial stiffness does not depend on the elements"
   }
 }
 
-TEST_CASE("bar bending: a simply supported bar against beam theory", "[bars]")
+TEST_CASE("bar bending: a simply supported bar against beam theory", "[bars][long]")
 {
   // Ends held (pins: the nodes have no rotation), the middle node pushed
   // sideways slowly: its reaction over its displacement is 48 E I / L^3.
@@ -409,7 +409,7 @@ TEST_CASE("restart with bars: bit for bit", "[bars][restart]")
   CHECK(resumed.s->energy().imbalance() == whole.s->energy().imbalance());
 }
 
-TEST_CASE("pull-out of a bar from a DE cylinder follows the bond law", "[bars][pullout]")
+TEST_CASE("pull-out of a bar from a DE cylinder follows the bond law", "[bars][pullout][long]")
 {
   // A 10 mm bar through the axis of a cylinder of DE concrete (80 mm
   // across, 50 mm high, spheres of 2.5 mm mean radius), bonded over the

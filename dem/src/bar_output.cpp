@@ -76,6 +76,7 @@ void BarWriter::write(double t, const Bars& bars)
   }
   write_dataset(_file, g + "position", bars.x.data(), H5T_NATIVE_DOUBLE, {_nodes, 3});
   write_dataset(_file, g + "displacement", u.data(), H5T_NATIVE_DOUBLE, {_nodes, 3});
+  write_dataset(_file, g + "velocity", bars.v.data(), H5T_NATIVE_DOUBLE, {_nodes, 3});
   write_dataset(_file, g + "axial_force", bars.force.data(), H5T_NATIVE_DOUBLE, {_elements});
   write_dataset(_file, g + "plastic_strain", plastic.data(), H5T_NATIVE_DOUBLE, {_elements});
   write_dataset(_file, g + "slip", slip.data(), H5T_NATIVE_DOUBLE, {_elements});
@@ -109,6 +110,7 @@ void BarWriter::write_xdmf() const
       << "  <Geometry GeometryType=\"XYZ\">\n   <DataItem Dimensions=\"" << _nodes
       << " 3\" Format=\"HDF\" NumberType=\"Float\" Precision=\"8\">" << at << "position</DataItem>\n  </Geometry>\n";
     attr("displacement", "Vector", "Node", _nodes, true);
+    attr("velocity", "Vector", "Node", _nodes, true);
     attr("axial_force", "Scalar", "Cell", _elements, false);
     attr("plastic_strain", "Scalar", "Cell", _elements, false);
     attr("slip", "Scalar", "Cell", _elements, false);
@@ -116,12 +118,7 @@ void BarWriter::write_xdmf() const
     x << " </Grid>\n";
   }
   x << "</Grid>\n</Domain>\n</Xdmf>\n";
-  const auto tmp = _xdmf.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << x.str();
-  }
-  std::filesystem::rename(tmp, _xdmf);
+  impl::replace_text_file(_xdmf, x.str());
 }
 
 } // namespace dembridge::dem

@@ -214,6 +214,7 @@ Bars make_bars(std::span<const BarLine> lines, std::vector<Steel> steels,
         bars.bend_e1.push_back(static_cast<std::int32_t>(e - 1));
         bars.bend_e2.push_back(static_cast<std::int32_t>(e));
         bars.bend_k.push_back(EI / (0.5 * (bars.l0[e - 1] + bars.l0[e])));
+        bars.bend_kept.push_back(1);
       }
     }
   }
@@ -371,6 +372,26 @@ Region region_without_bars(const Region& region, const Bars& bars, double rmax)
   return sdf_region(region.name + " less the bars", sdf, region.lo, region.hi);
 }
 
+std::array<std::size_t, 2> make_room_for_bars(Packing& packing, const Region& region, const Bars& bars)
+{
+  if (packing.size() == 0)
+    return {0, 0};
+  const auto on = spheres_on_bars(bars, packing.x, packing.r);
+  Packing kept;
+  for (std::size_t i = 0; i < packing.size(); ++i)
+    if (!on[i])
+    {
+      kept.x.insert(kept.x.end(), &packing.x[3 * i], &packing.x[3 * i + 3]);
+      kept.r.push_back(packing.r[i]);
+    }
+  const double rmin = *std::min_element(packing.r.begin(), packing.r.end());
+  const double rmax = *std::max_element(packing.r.begin(), packing.r.end());
+  const std::size_t removed = packing.size() - kept.size();
+  const std::size_t added = fill_boundary(kept, region_without_bars(region, bars, rmax), rmin, rmax);
+  packing = std::move(kept);
+  return {removed, added};
+}
+
 std::size_t create_bonds(Bars& bars, const Particles& p, double reach)
 {
   if (!(reach >= 0.0) || !std::isfinite(reach))
@@ -439,6 +460,11 @@ BondGeometry bond_geometry(const Bars& bars, const Particles& p, std::size_t k)
     a[q] = c[q] - ((1 - xi) * pa[q] + xi * pb[q]);
   }
   g.length = std::sqrt(dot(d, d));
+  if (!(g.length > 0.0)) // the element's ends meet: no axis (the bond then acts radially from P)
+  {
+    g.length = 1.0;
+    std::fill(std::begin(d), std::end(d), 0.0);
+  }
   for (int q = 0; q < 3; ++q)
     g.t[q] = d[q] / g.length;
   g.axial = dot(a, g.t);
@@ -451,16 +477,19 @@ BondGeometry bond_geometry(const Bars& bars, const Particles& p, std::size_t k)
 }
 
 /// Element e's axial force from the positions; with advance, its history
-/// moves on (and a rupture releases its energy into `broken`).
-void element_force(Bars& bars, std::size_t e, bool advance, double& broken)
+/// moves on (and a rupture releases its energy into `broken`). Returns
+/// true when it breaks in this call.
+bool element_force(Bars& bars, std::size_t e, bool advance, double& broken)
 {
   if (bars.broken[e])
-    return;
+    return false;
   const std::int32_t ia = bars.a[e], ib = bars.b[e];
   double d[3];
   for (int q = 0; q < 3; ++q)
     d[q] = bars.x[3 * ib + q] - bars.x[3 * ia + q];
   const double L = std::sqrt(dot(d, d));
+  if (!(L > 1e-12 * bars.l0[e])) // its ends meet: no direction (and no rupture in compression)
+    return false;
   const Steel& st = bars.steels[bars.steel[e]];
   const SteelState s = steel_update(L / bars.l0[e] - 1.0, bars.plastic[e], bars.alpha[e], st);
   if (s.broken && advance)
@@ -472,7 +501,7 @@ void element_force(Bars& bars, std::size_t e, bool advance, double& broken)
               + 0.5 * n_old * (L - bars.length[e]);
     bars.broken[e] = 1;
     bars.force[e] = 0.0;
-    return;
+    return true;
   }
   const double N = s.broken ? 0.0 : s.stress * bars.area[e];
   if (advance)
@@ -488,6 +517,7 @@ void element_force(Bars& bars, std::size_t e, bool advance, double& broken)
     bars.f[3 * ia + q] += N * d[q] / L;
     bars.f[3 * ib + q] -= N * d[q] / L;
   }
+  return false;
 }
 
 /// Bond k's forces on its sphere and the element's nodes: the gradients of
@@ -504,7 +534,7 @@ void bond_force(Bars& bars, Particles& p, std::size_t k, bool advance, bool gone
   const double S = bars.surface[k];
   const LinkLaw radial = radial_law(law, S);
   const NormalForce nf = link_normal_force(gap, bars.gap_max[k], radial);
-  if (advance && (gone || nf.state == NormalState::broken))
+  if (advance && (gone || nf.state == NormalState::broken || bars.broken[bars.element[k]]))
   {
     // what the bond stored at the step's start plus its forces' work over
     // the step, trapezoidal with zero at the end
@@ -560,12 +590,39 @@ bool bend_geometry(const Bars& bars, std::size_t k, double* t1, double* t2, doub
   }
   l1 = std::sqrt(dot(t1, t1));
   l2 = std::sqrt(dot(t2, t2));
+  if (!(l1 > 0.0 && l2 > 0.0)) // an element's ends meet: no angle
+    return false;
   for (int q = 0; q < 3; ++q)
   {
     t1[q] /= l1;
     t2[q] /= l2;
   }
   return true;
+}
+
+/// A bending spring one of whose elements broke in this step releases what
+/// it stored, k (1 - t1 . t2) at the step's end (bend_kept marks the
+/// springs still counted). Called after the elements' rupture.
+void release_bending(Bars& bars, double& broken)
+{
+  for (std::size_t k = 0; k < bars.bend_k.size(); ++k)
+  {
+    if (!bars.bend_kept[k] || !(bars.broken[bars.bend_e1[k]] || bars.broken[bars.bend_e2[k]]))
+      continue;
+    bars.bend_kept[k] = 0;
+    double t1[3], t2[3];
+    const double* xa = &bars.x[3 * bars.bend_a[k]];
+    const double* xb = &bars.x[3 * bars.bend_b[k]];
+    const double* xc = &bars.x[3 * bars.bend_c[k]];
+    for (int q = 0; q < 3; ++q)
+    {
+      t1[q] = xb[q] - xa[q];
+      t2[q] = xc[q] - xb[q];
+    }
+    const double l1 = std::sqrt(dot(t1, t1)), l2 = std::sqrt(dot(t2, t2));
+    if (l1 > 0.0 && l2 > 0.0)
+      broken += bars.bend_k[k] * (1.0 - dot(t1, t2) / (l1 * l2));
+  }
 }
 
 /// The bending spring's forces, -grad of k (1 - c), c = t1 . t2:
@@ -594,8 +651,11 @@ BarWork bar_forces(Bars& bars, Particles& p, bool advance, std::span<const std::
 {
   BarWork w;
   std::fill(bars.f.begin(), bars.f.end(), 0.0);
+  bool any_broke = false;
   for (std::size_t e = 0; e < bars.elements(); ++e)
-    element_force(bars, e, advance, w.broken);
+    any_broke = element_force(bars, e, advance, w.broken) || any_broke;
+  if (any_broke)
+    release_bending(bars, w.broken);
   for (std::size_t k = 0; k < bars.bend_k.size(); ++k)
     bend_force(bars, k);
   for (std::size_t k = 0; k < bars.bonds(); ++k)
@@ -716,7 +776,11 @@ void add_bar_rows(const Bars& bars, const Particles& p, std::vector<double>& sph
     const BondLaw& law = bars.bond_laws[bars.bond_law[bars.element[b]]];
     const double k = std::max(law.k0(), law.radial_stiffness) * bars.surface[b];
     const std::size_t e = bars.element[b], c = bars.sphere[b];
-    const double w[2] = {1.0 - bars.xi[b], bars.xi[b]};
+    // the node factors of the bond's forces, their lever terms included
+    // (the offset from the axis and along it, over the element's length)
+    const BondGeometry g = bond_geometry(bars, p, b);
+    const double lever = (g.rho + std::abs(g.axial)) / g.length;
+    const double w[2] = {1.0 - bars.xi[b] + lever, bars.xi[b] + lever};
     const std::int32_t nd[2] = {bars.a[e], bars.b[e]};
     const double mc = p.m[c];
     sphere_rows[c] += k / mc;

@@ -1,5 +1,8 @@
 #pragma once
-// Writes one HDF5 dataset (the output series' helper; internal to dem).
+// Helpers of the output series (internal to dem): one HDF5 dataset, and a
+// text file replaced whole.
+#include <filesystem>
+#include <fstream>
 #include <hdf5.h>
 #include <initializer_list>
 #include <stdexcept>
@@ -25,5 +28,16 @@ inline void write_dataset(hid_t file, const std::string& name, const void* data,
   H5Dclose(set);
   H5Pclose(lcpl);
   H5Sclose(space);
+}
+/// Writes `text` to `file` through FILE.tmp and a rename, so that a reader
+/// never sees a half-written file (an XDMF rewritten at every frame).
+inline void replace_text_file(const std::filesystem::path& file, const std::string& text)
+{
+  const auto tmp = file.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << text;
+  }
+  std::filesystem::rename(tmp, file);
 }
 } // namespace dembridge::dem::impl

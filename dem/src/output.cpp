@@ -221,12 +221,7 @@ void ParticleWriter::write_xdmf() const
     x << "</Grid>\n";
   }
   x << "</Domain>\n</Xdmf>\n";
-  const auto tmp = _xdmf.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << x.str();
-  }
-  std::filesystem::rename(tmp, _xdmf);
+  impl::replace_text_file(_xdmf, x.str());
 }
 
 } // namespace dembridge::dem

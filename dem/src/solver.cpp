@@ -185,7 +185,8 @@ void DemSolver::start()
   for (auto& c : _contacts)
     c.friction_work = 0.0;
   const DemEnergy e = energy();
-  _e.initial = e.kinetic + e.elastic + e.body_kinetic + e.body_contact + e.bar_kinetic + e.bar_elastic;
+  _e.initial = e.kinetic + e.elastic + e.body_kinetic + e.body_contact + e.bar_kinetic + e.bar_elastic
+               + e.bar_plastic + e.bar_opening;
   _started = true;
 }
 
@@ -517,7 +518,7 @@ void DemSolver::check_energy() const
   const DemEnergy e = energy();
   const double work = e.external_work + e.prescribed_work;
   const double scale = e.initial + std::abs(e.external_work) + std::abs(e.prescribed_work) + e.kinetic + e.elastic
-                       + e.body_kinetic + e.body_contact;
+                       + e.body_kinetic + e.body_contact + e.bar_kinetic + e.bar_elastic;
   if (!(scale > 0.0) || e.imbalance() <= _guard_margin * scale)
     return;
   std::ostringstream s;

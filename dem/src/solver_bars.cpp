@@ -27,6 +27,8 @@ void DemSolver::add_bars(Bars bars)
 
 std::size_t DemSolver::move_bar_nodes(std::span<const std::int32_t> nodes, const std::array<double, 3>& velocity)
 {
+  if (_started)
+    throw std::runtime_error("bar nodes: their motion is set before start()");
   const auto group = static_cast<std::int32_t>(_bar_reac.size());
   for (auto n : nodes)
   {
@@ -99,7 +101,8 @@ void DemSolver::save_bars(const checkpoint::Group& g) const
                          {"slip", &b.slip}, {"slip_max", &b.slip_max}, {"gap", &b.gap}, {"gap_max", &b.gap_max}, {"m", &b.m},
                          {"surface", &b.surface}, {"fold", &_bar_fold}})
     g.write(name, *v);
-  for (auto [name, v] : {std::pair{"broken", &b.broken}, {"open", &b.open}, {"held", &b.held}})
+  for (auto [name, v] : {std::pair{"broken", &b.broken}, {"open", &b.open}, {"held", &b.held},
+                         {"bend_kept", &b.bend_kept}})
     g.write(name, *v);
   g.write("moved", _bar_moved);
   g.write("moved_group", _bar_group);
@@ -132,7 +135,8 @@ void DemSolver::load_bars(const checkpoint::Group& g)
                          {"slip", &b.slip}, {"slip_max", &b.slip_max}, {"gap", &b.gap}, {"gap_max", &b.gap_max},
                          {"surface", &b.surface}})
     same(name, *v);
-  for (auto [name, v] : {std::pair{"broken", &b.broken}, {"open", &b.open}, {"held", &b.held}})
+  for (auto [name, v] : {std::pair{"broken", &b.broken}, {"open", &b.open}, {"held", &b.held},
+                         {"bend_kept", &b.bend_kept}})
     same(name, *v);
   std::vector<std::int32_t> moved, group;
   g.read("moved", moved);

@@ -165,7 +165,17 @@ private:
     double solid = 0.0;
     for (double r : _pk.r)
       solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-    _fraction = solid / region.volume;
+    // (the concrete's volume: the slab's less the bars' inside it)
+    double bars_volume = 0.0;
+    for (std::size_t e = 0; e < _bars.elements(); ++e)
+    {
+      const double* a = &_bars.x[3 * _bars.a[e]];
+      const double* b = &_bars.x[3 * _bars.b[e]];
+      const V3 mid{0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+      if (region.sdf(mid) < 0.0)
+        bars_volume += _bars.area[e] * _bars.l0[e];
+    }
+    _fraction = solid / (region.volume - bars_volume);
     const Material& mat = _s.material.material;
     // the bars take their room: the spheres they overlap are left out (none
     // of a packing generated around them, beyond its tolerance)
@@ -210,22 +220,10 @@ private:
   /// so that no void is left beside a bar.
   void line_the_bars(const Region& region)
   {
-    const auto on = spheres_on_bars(_bars, _pk.x, _pk.r);
-    Packing kept;
-    for (std::size_t i = 0; i < _pk.size(); ++i)
-      if (!on[i])
-      {
-        kept.x.insert(kept.x.end(), &_pk.x[3 * i], &_pk.x[3 * i + 3]);
-        kept.r.push_back(_pk.r[i]);
-      }
-    const double rmin = *std::min_element(_pk.r.begin(), _pk.r.end());
-    const double rmax = *std::max_element(_pk.r.begin(), _pk.r.end());
-    const std::size_t removed = _pk.size() - kept.size();
-    const std::size_t added = fill_boundary(kept, region_without_bars(region, _bars, rmax), rmin, rmax);
+    const auto [removed, added] = make_room_for_bars(_pk, region, _bars);
     if (!_cfg.quiet)
       std::cout << "the bars' room: " << removed << " spheres removed, " << added << " added against the bars"
                 << std::endl;
-    _pk = std::move(kept);
   }
 
   /// Leaves out the spheres (x, r) that overlap a bar by more than the
@@ -489,10 +487,11 @@ private:
     _csv << std::setprecision(10) << _solver->time() << ',' << x[0] << ',' << x[1] << ',' << x[2] << ',' << -x[2]
          << ',' << b.v[0] << ',' << b.v[1] << ',' << b.v[2] << ',' << std::sqrt(dot(b.v, b.v)) << ','
          << path_velocity() << ',' << contact_force() << ',' << _solver->body_contacts(0).ids.size() << ','
-         << broken() << ',' << _solver->removed().count << ',' << e.body_kinetic << ',' << e.kinetic << ','
-         << e.elastic + e.body_contact << ','
-         << e.softening + e.compaction + e.breakage + e.friction + e.body_friction + e.damping << ','
-         << e.removed << ','
+         << broken() << ',' << _solver->removed().count << ',' << e.body_kinetic << ',' << e.kinetic + e.bar_kinetic
+         << ',' << e.elastic + e.body_contact + e.bar_elastic << ','
+         << e.softening + e.compaction + e.breakage + e.friction + e.body_friction + e.damping + e.bar_plastic
+                + e.bar_opening + e.bar_slip + e.bar_broken
+         << ',' << e.removed << ','
          << e.imbalance() << '\n';
   }
 

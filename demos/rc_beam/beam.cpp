@@ -57,7 +57,7 @@ double BeamTheory::deflection(const BeamConfig& c, double P) const
   const double xc = P > 0.0 ? std::min(half, 2.0 * m_cracking / P) : half;
   const double bending = P / (2.0 * E)
                          * (xc * xc * xc / (3.0 * i_uncracked) + (half * half * half - xc * xc * xc) / (3.0 * i_cracked));
-  const double G = E / (2.0 * (1.0 + c.material.poisson_ratio));
+  const double G = E / (2.0 * (1.0 + c.concrete_poisson));
   return bending + P * c.span / (4.0 * 5.0 / 6.0 * G * c.width * c.height);
 }
 
@@ -114,21 +114,12 @@ private:
     po.radius_ratio = _c.radius_ratio;
     po.seed = _c.seed;
     Packing pk = generate_packing(region, po);
-    const auto on = spheres_on_bars(_bars, pk.x, pk.r);
-    Packing kept;
-    for (std::size_t i = 0; i < pk.size(); ++i)
-      if (!on[i])
-      {
-        kept.x.insert(kept.x.end(), &pk.x[3 * i], &pk.x[3 * i + 3]);
-        kept.r.push_back(pk.r[i]);
-      }
-    const double rmin = *std::min_element(pk.r.begin(), pk.r.end());
-    _rmax = *std::max_element(pk.r.begin(), pk.r.end());
-    fill_boundary(kept, region_without_bars(region, _bars, _rmax), rmin, _rmax);
-    double solid = 0.0;
+    double solid = 0.0; // the packing fraction, the bars' room not made yet
     for (double r : pk.r)
       solid += 4.0 / 3.0 * pi * r * r * r;
-    _p = make_particles(kept.x, kept.r, _c.material.density, solid / region.volume);
+    make_room_for_bars(pk, region, _bars);
+    _rmax = *std::max_element(pk.r.begin(), pk.r.end());
+    _p = make_particles(pk.x, pk.r, _c.material.density, solid / region.volume);
     _links = create_links(_p, lambda_for_bulk_links(region, _p.x, _p.r, _c.links_per_sphere), _c.material);
     _bonds = create_bonds(_bars, _p, 0.5 * _c.mean_radius);
   }
@@ -207,6 +198,13 @@ private:
       s = std::max(s, _solver->bars().force[e] / _solver->bars().area[e]);
     return s;
   }
+  /// Some bar element has yielded (its plastic strain grew; without
+  /// hardening its stress stays at f_y only to round-off).
+  bool yielded() const
+  {
+    const auto& b = _solver->bars();
+    return std::any_of(b.alpha.begin(), b.alpha.end(), [](double a) { return a > 0.0; });
+  }
   std::size_t broken() const
   {
     return _links.count(LinkState::broken_tension) + _links.count(LinkState::broken_shear);
@@ -244,7 +242,7 @@ private:
       if (s % every != 0 && (_c.quiet || clock.seconds() - last <= 2.0))
         continue;
       const double stress = bar_stress();
-      if (_p_yield_model == 0.0 && stress >= _c.steel.yield)
+      if (_p_yield_model == 0.0 && yielded())
       {
         _p_yield_model = load();
         _d_yield_model = deflection();
@@ -291,7 +289,7 @@ private:
     const double k_cr_theory =
         (_t.p_yield - _t.p_cracking) / (_t.deflection(_c, _t.p_yield) - _t.deflection(_c, _t.p_cracking));
     const double k0_theory = 0.1 * _t.p_cracking / _t.deflection(_c, 0.1 * _t.p_cracking);
-    const double G = _c.concrete_modulus / (2.0 * (1.0 + _c.material.poisson_ratio));
+    const double G = _c.concrete_modulus / (2.0 * (1.0 + _c.concrete_poisson));
     const double k_fully_cracked = 1.0 / (std::pow(_c.span, 3) / (48.0 * _c.concrete_modulus * _t.i_cracked)
                                           + _c.span / (4.0 * 5.0 / 6.0 * G * _c.width * _c.height));
     auto rel = [](double a, double b) { return b != 0.0 ? a / b - 1.0 : 0.0; };

@@ -30,6 +30,7 @@ struct BeamConfig
   double links_per_sphere = 12.0;
   double tensile_strength = 0.0; ///< the concrete's macroscopic sigma_t for the theory [Pa] (the material file's)
   double concrete_modulus = 0.0; ///< its macroscopic E for the theory [Pa] (the material file's)
+  double concrete_poisson = 0.2; ///< its macroscopic nu for the theory's shear deflection (the material file's)
   double mean_radius = 5e-3;  ///< [m]
   double radius_ratio = 2.0;
   unsigned seed = 1;

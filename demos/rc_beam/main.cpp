@@ -34,6 +34,7 @@ int main(int argc, char** argv)
     c.material = f.material;
     c.links_per_sphere = f.links_per_sphere;
     c.concrete_modulus = f.macroscopic.value("youngs_modulus_pa", f.material.youngs_modulus);
+    c.concrete_poisson = f.macroscopic.value("poisson_ratio", f.material.poisson_ratio);
     c.tensile_strength = f.macroscopic.value("tensile_strength_pa", 0.0);
     if (!(c.tensile_strength > 0.0))
       throw std::runtime_error("material file '" + file + "': no macroscopic.tensile_strength_pa (the section "

@@ -470,6 +470,7 @@ void FEModel::set_reinforcement(const Reinforcement& r, std::span<const std::int
                                + r.direction[2] * r.direction[2]);
   for (int k = 0; k < 3; ++k)
     values[8 + k] = r.layers.empty() ? 0.0 : r.direction[k] / len;
+  // every cell checked before any is written (an error leaves the model as it was)
   for (std::int32_t c : cells)
   {
     if (c < 0 || static_cast<std::size_t>(c) >= num_cells())
@@ -491,6 +492,9 @@ void FEModel::set_reinforcement(const Reinforcement& r, std::span<const std::int
       throw std::runtime_error("reinforcement: the bar direction is (nearly) normal to cell "
                                + std::to_string(c) + ": its projection on the cell's plane "
                                                      "fixes d1, give a vector along the shell");
+  }
+  for (std::int32_t c : cells)
+  {
     const std::int32_t dof = dofs.links(c)[0];
     for (int k = 0; k < 11; ++k)
       x[dof * bs + k] = values[k];

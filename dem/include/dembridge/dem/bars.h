@@ -122,6 +122,7 @@ struct Bars
   // (a -> b) and (b -> c), k = E I / ((l1 + l2) / 2)
   std::vector<std::int32_t> bend_a, bend_b, bend_c, bend_e1, bend_e2;
   std::vector<double> bend_k;
+  std::vector<std::uint8_t> bend_kept; ///< 0 once an element of the spring broke and its energy was released
   // bonds: sphere to a material point of an element
   std::vector<std::int32_t> sphere, element;
   std::vector<double> xi;                 ///< the point's place along the element, in [0, 1]
@@ -161,6 +162,12 @@ std::vector<std::uint8_t> spheres_on_bars(const Bars& bars, std::span<const doub
 /// past. For fill_boundary (packing.h) after the spheres on the bars are
 /// removed: the spheres it adds line the bars.
 Region region_without_bars(const Region& region, const Bars& bars, double rmax);
+
+/// Makes room for the bars in a packing of `region`: removes the spheres
+/// that overlap a bar (spheres_on_bars) and lines the bars' surfaces with
+/// spheres tangent to them (fill_boundary on region_without_bars, radii in
+/// the packing's range). Returns {removed, added}.
+std::array<std::size_t, 2> make_room_for_bars(Packing& packing, const Region& region, const Bars& bars);
 
 /// Bonds every sphere whose surface lies within `reach` of a bar's surface
 /// (centre closer to the axis than radius + bar radius + reach) to the

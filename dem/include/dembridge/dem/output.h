@@ -65,7 +65,8 @@ private:
 };
 
 /// XDMF + HDF5 time series of the bars (bars.h) for ParaView: a line mesh of
-/// their elements, the nodes' positions and displacements [m], and per
+/// their elements, the nodes' positions and displacements [m] and velocities
+/// [m/s], and per
 /// element its axial force [N], plastic strain [-], the mean slip of its
 /// bonds [m] (|slip|, 0 without a bond) and whether it broke (0 or 1).
 class BarWriter

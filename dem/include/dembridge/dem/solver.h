@@ -119,10 +119,10 @@ public:
   /// a second call.
   void add_bars(Bars bars);
   const Bars& bars() const { return _bars; }
-  /// From the next step on, the listed bar nodes move at a constant velocity
-  /// [m/s] (a bar pulled at its end; zero holds them). Returns the group's
+  /// The listed bar nodes move at a constant velocity [m/s] (a bar pulled
+  /// at its end; zero holds them); before start(). Returns the group's
   /// index for bar_reaction(). @throws naming a node out of range or moved
-  /// already.
+  /// already, or after start().
   std::size_t move_bar_nodes(std::span<const std::int32_t> nodes, const std::array<double, 3>& velocity);
   /// The force that keeps the velocity of the nodes of group `g` [N].
   std::array<double, 3> bar_reaction(std::size_t g) const { return _bar_reac.at(g); }
