@@ -575,11 +575,10 @@ void bond_force(Bars& bars, Particles& p, std::size_t k, bool advance, bool gone
 namespace
 {
 /// Unit directions t1 (a -> b), t2 (b -> c) of bending spring k and the
-/// element lengths; false if one of its elements broke.
-bool bend_geometry(const Bars& bars, std::size_t k, double* t1, double* t2, double& l1, double& l2)
+/// element lengths, whatever its elements' state; false if an element's
+/// ends meet (no angle).
+bool bend_directions(const Bars& bars, std::size_t k, double* t1, double* t2, double& l1, double& l2)
 {
-  if (bars.broken[bars.bend_e1[k]] || bars.broken[bars.bend_e2[k]])
-    return false;
   const double* xa = &bars.x[3 * bars.bend_a[k]];
   const double* xb = &bars.x[3 * bars.bend_b[k]];
   const double* xc = &bars.x[3 * bars.bend_c[k]];
@@ -600,6 +599,12 @@ bool bend_geometry(const Bars& bars, std::size_t k, double* t1, double* t2, doub
   return true;
 }
 
+/// The same for a spring that acts: false if one of its elements broke.
+bool bend_geometry(const Bars& bars, std::size_t k, double* t1, double* t2, double& l1, double& l2)
+{
+  return !bars.broken[bars.bend_e1[k]] && !bars.broken[bars.bend_e2[k]] && bend_directions(bars, k, t1, t2, l1, l2);
+}
+
 /// A bending spring one of whose elements broke in this step releases what
 /// it stored, k (1 - t1 . t2) at the step's end (bend_kept marks the
 /// springs still counted). Called after the elements' rupture.
@@ -610,18 +615,9 @@ void release_bending(Bars& bars, double& broken)
     if (!bars.bend_kept[k] || !(bars.broken[bars.bend_e1[k]] || bars.broken[bars.bend_e2[k]]))
       continue;
     bars.bend_kept[k] = 0;
-    double t1[3], t2[3];
-    const double* xa = &bars.x[3 * bars.bend_a[k]];
-    const double* xb = &bars.x[3 * bars.bend_b[k]];
-    const double* xc = &bars.x[3 * bars.bend_c[k]];
-    for (int q = 0; q < 3; ++q)
-    {
-      t1[q] = xb[q] - xa[q];
-      t2[q] = xc[q] - xb[q];
-    }
-    const double l1 = std::sqrt(dot(t1, t1)), l2 = std::sqrt(dot(t2, t2));
-    if (l1 > 0.0 && l2 > 0.0)
-      broken += bars.bend_k[k] * (1.0 - dot(t1, t2) / (l1 * l2));
+    double t1[3], t2[3], l1, l2;
+    if (bend_directions(bars, k, t1, t2, l1, l2))
+      broken += bars.bend_k[k] * (1.0 - dot(t1, t2));
   }
 }
 
