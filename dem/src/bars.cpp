@@ -128,6 +128,26 @@ std::array<double, 3> bond_shear(double tau_old, double slip_old, double slip, d
   return {tau, smax, dissipated};
 }
 
+namespace
+{
+/// Whether the boxes of elements e and g, each grown by its bar's
+/// diameter, are apart (then the bars cannot overlap there).
+bool boxes_apart(const Bars& bars, std::size_t e, std::size_t g)
+{
+  const double grow = 2.0 * (std::sqrt(bars.area[e] / std::numbers::pi) + std::sqrt(bars.area[g] / std::numbers::pi));
+  for (int k = 0; k < 3; ++k)
+  {
+    const double e0 = std::min(bars.x[3 * bars.a[e] + k], bars.x[3 * bars.b[e] + k]),
+                 e1 = std::max(bars.x[3 * bars.a[e] + k], bars.x[3 * bars.b[e] + k]),
+                 g0 = std::min(bars.x[3 * bars.a[g] + k], bars.x[3 * bars.b[g] + k]),
+                 g1 = std::max(bars.x[3 * bars.a[g] + k], bars.x[3 * bars.b[g] + k]);
+    if (e1 + grow < g0 || g1 + grow < e0)
+      return true;
+  }
+  return false;
+}
+} // namespace
+
 Bars make_bars(std::span<const BarLine> lines, std::vector<Steel> steels,
                std::vector<BondLaw> bond_laws, double element_length)
 {
@@ -223,7 +243,7 @@ Bars make_bars(std::span<const BarLine> lines, std::vector<Steel> steels,
   for (std::size_t e = 0; e < ne; ++e)
     for (std::size_t g = e + 1; g < ne; ++g)
     {
-      if (bars.line[e] == bars.line[g])
+      if (bars.line[e] == bars.line[g] || boxes_apart(bars, e, g))
         continue;
       // sample the closer segment pair: the distance between two segments
       // is reached at an end of one of them or inside both; check the ends
@@ -265,48 +285,14 @@ std::array<double, 2> distance_to_element(const Bars& bars, std::size_t e, const
 
 namespace
 {
-/// The nearest element to x within `limit(e)` of its axis: {element, xi,
-/// distance}, element -1 if none. Elements scanned in order (bars are few).
-template <typename Limit>
-std::tuple<std::int64_t, double, double> nearest_element(const Bars& bars, const double* x, Limit&& limit)
-{
-  std::int64_t best = -1;
-  double bxi = 0.0, bd = std::numeric_limits<double>::infinity();
-  for (std::size_t e = 0; e < bars.elements(); ++e)
-  {
-    const auto [d, xi] = distance_to_element(bars, e, x);
-    if (d < limit(e) && d < bd)
-    {
-      best = static_cast<std::int64_t>(e);
-      bd = d;
-      bxi = xi;
-    }
-  }
-  return {best, bxi, bd};
-}
-double bar_radius(const Bars& bars, std::size_t e) { return std::sqrt(bars.area[e] / std::numbers::pi); }
-} // namespace
-
-std::vector<std::uint8_t> spheres_on_bars(const Bars& bars, std::span<const double> centres,
-                                          std::span<const double> radii, double tolerance)
-{
-  std::vector<std::uint8_t> on(radii.size(), 0);
-  for (std::size_t i = 0; i < radii.size(); ++i)
-    on[i] = std::get<0>(nearest_element(bars, &centres[3 * i], [&](std::size_t e)
-                                        { return radii[i] + bar_radius(bars, e) - tolerance; }))
-            >= 0;
-  return on;
-}
-
-namespace
-{
 /// The bars' elements by cells of a uniform grid: each element listed in
-/// every cell its box, grown by a reach, touches; a query looks in its own
-/// cell only.
+/// every cell its box, grown by `reach`, touches; a query looks in its own
+/// cell only, and finds every element within `reach` of it (a point
+/// outside the grid has none).
 struct ElementGrid
 {
   Point lo{};
-  double cell = 0.0;
+  double cell = 1.0;
   int n[3] = {1, 1, 1};
   std::vector<std::vector<std::int32_t>> lists;
   std::int64_t index(const Point& x) const
@@ -321,52 +307,115 @@ struct ElementGrid
     }
     return id;
   }
-};
-} // namespace
-
-Region region_without_bars(const Region& region, const Bars& bars, double rmax)
-{
-  double rb = 0.0, lmax = 0.0;
-  for (std::size_t e = 0; e < bars.elements(); ++e)
+  std::span<const std::int32_t> near(const double* x) const
   {
-    rb = std::max(rb, bar_radius(bars, e));
-    lmax = std::max(lmax, bars.l0[e]);
+    const std::int64_t id = index({x[0], x[1], x[2]});
+    return id < 0 ? std::span<const std::int32_t>{} : std::span<const std::int32_t>(lists[id]);
   }
-  auto grid = std::make_shared<ElementGrid>();
-  // each cell lists the elements within `reach` of it: elsewhere the bars'
-  // part of the distance is at least reach - rb, past what the packing looks
-  const double reach = 6.0 * rmax + 2.0 * rb;
-  grid->cell = std::max(lmax, 0.25 * reach);
+};
+
+/// The grid of the elements for queries within `reach` of them, cells of
+/// max(longest element, reach / 4) over the bars' box grown by reach.
+ElementGrid element_grid(const Bars& bars, double reach)
+{
+  ElementGrid grid;
+  if (bars.elements() == 0)
+    return grid;
+  Point lo{bars.x[0], bars.x[1], bars.x[2]}, hi = lo;
+  double lmax = 0.0;
+  for (std::size_t q = 0; q < bars.nodes(); ++q)
+    for (int k = 0; k < 3; ++k)
+    {
+      lo[k] = std::min(lo[k], bars.x[3 * q + k]);
+      hi[k] = std::max(hi[k], bars.x[3 * q + k]);
+    }
+  for (double l : bars.l0)
+    lmax = std::max(lmax, l);
+  grid.cell = std::max(lmax, 0.25 * reach);
   for (int k = 0; k < 3; ++k)
   {
-    grid->lo[k] = region.lo[k] - reach;
-    grid->n[k] = static_cast<int>(std::ceil((region.hi[k] - region.lo[k] + 2.0 * reach) / grid->cell)) + 1;
+    grid.lo[k] = lo[k] - reach;
+    grid.n[k] = static_cast<int>(std::ceil((hi[k] - lo[k] + 2.0 * reach) / grid.cell)) + 1;
   }
-  grid->lists.resize(std::size_t(grid->n[0]) * grid->n[1] * grid->n[2]);
+  grid.lists.resize(std::size_t(grid.n[0]) * grid.n[1] * grid.n[2]);
   for (std::size_t e = 0; e < bars.elements(); ++e)
   {
     int c0[3], c1[3];
     for (int k = 0; k < 3; ++k)
     {
       const double a = bars.x[3 * bars.a[e] + k], b = bars.x[3 * bars.b[e] + k];
-      c0[k] = std::max(0, static_cast<int>(std::floor((std::min(a, b) - reach - grid->lo[k]) / grid->cell)));
-      c1[k] = std::min(grid->n[k] - 1, static_cast<int>(std::floor((std::max(a, b) + reach - grid->lo[k]) / grid->cell)));
+      c0[k] = std::max(0, static_cast<int>(std::floor((std::min(a, b) - reach - grid.lo[k]) / grid.cell)));
+      c1[k] = std::min(grid.n[k] - 1, static_cast<int>(std::floor((std::max(a, b) + reach - grid.lo[k]) / grid.cell)));
     }
     for (int i = c0[0]; i <= c1[0]; ++i)
       for (int j = c0[1]; j <= c1[1]; ++j)
         for (int k = c0[2]; k <= c1[2]; ++k)
-          grid->lists[(std::size_t(i) * grid->n[1] + j) * grid->n[2] + k].push_back(static_cast<std::int32_t>(e));
+          grid.lists[(std::size_t(i) * grid.n[1] + j) * grid.n[2] + k].push_back(static_cast<std::int32_t>(e));
   }
+  return grid;
+}
+
+/// The nearest element to x within `limit(e)` (<= the grid's reach) of its
+/// axis: {element, xi, distance}, element -1 if none.
+template <typename Limit>
+std::tuple<std::int64_t, double, double> nearest_element(const Bars& bars, const ElementGrid& grid, const double* x,
+                                                         Limit&& limit)
+{
+  std::int64_t best = -1;
+  double bxi = 0.0, bd = std::numeric_limits<double>::infinity();
+  for (const std::int32_t e : grid.near(x))
+  {
+    const auto [d, xi] = distance_to_element(bars, e, x);
+    if (d < limit(e) && d < bd)
+    {
+      best = e;
+      bd = d;
+      bxi = xi;
+    }
+  }
+  return {best, bxi, bd};
+}
+double bar_radius(const Bars& bars, std::size_t e) { return std::sqrt(bars.area[e] / std::numbers::pi); }
+double max_bar_radius(const Bars& bars)
+{
+  double rb = 0.0;
+  for (std::size_t e = 0; e < bars.elements(); ++e)
+    rb = std::max(rb, bar_radius(bars, e));
+  return rb;
+}
+} // namespace
+
+std::vector<std::uint8_t> spheres_on_bars(const Bars& bars, std::span<const double> centres,
+                                          std::span<const double> radii, double tolerance)
+{
+  std::vector<std::uint8_t> on(radii.size(), 0);
+  double reach = 0.0;
+  for (double r : radii)
+    reach = std::max(reach, r);
+  reach += max_bar_radius(bars);
+  const ElementGrid grid = element_grid(bars, reach);
+  for (std::size_t i = 0; i < radii.size(); ++i)
+    on[i] = std::get<0>(nearest_element(bars, grid, &centres[3 * i], [&](std::size_t e)
+                                        { return radii[i] + bar_radius(bars, e) - tolerance; }))
+            >= 0;
+  return on;
+}
+
+
+Region region_without_bars(const Region& region, const Bars& bars, double rmax)
+{
+  // within `reach` of a bar the distance is exact; beyond, the bars' part
+  // is at least reach - rb, past what the packing looks
+  const double rb = max_bar_radius(bars), reach = 6.0 * rmax + 2.0 * rb;
+  auto grid = std::make_shared<const ElementGrid>(element_grid(bars, reach));
   auto shared = std::make_shared<Bars>(bars);
   const double far = reach - rb; // no element within this of a cell's point it does not list
   auto base = region.sdf;
   auto sdf = [base, grid, shared, far](const Point& x)
   {
     double bars_part = far;
-    const std::int64_t id = grid->index(x);
-    if (id >= 0)
-      for (std::int32_t e : grid->lists[id])
-        bars_part = std::min(bars_part, distance_to_element(*shared, e, x.data())[0] - bar_radius(*shared, e));
+    for (std::int32_t e : grid->near(x.data()))
+      bars_part = std::min(bars_part, distance_to_element(*shared, e, x.data())[0] - bar_radius(*shared, e));
     return std::max(base(x), -bars_part);
   };
   return sdf_region(region.name + " less the bars", sdf, region.lo, region.hi);
@@ -398,9 +447,13 @@ std::size_t create_bonds(Bars& bars, const Particles& p, double reach)
     refuse("bond reach", reach, ">= 0 m");
   std::vector<std::size_t> per_element(bars.elements(), 0);
   const std::size_t first = bars.bonds();
+  double rmax = 0.0;
+  for (double r : p.r)
+    rmax = std::max(rmax, r);
+  const ElementGrid grid = element_grid(bars, rmax + max_bar_radius(bars) + reach);
   for (std::size_t i = 0; i < p.size(); ++i)
   {
-    const auto [e, xi, d] = nearest_element(bars, &p.x[3 * i], [&](std::size_t el)
+    const auto [e, xi, d] = nearest_element(bars, grid, &p.x[3 * i], [&](std::size_t el)
                                             { return p.r[i] + bar_radius(bars, el) + reach; });
     if (e < 0)
       continue;

@@ -3,6 +3,8 @@
 // reaction, and their part of a checkpoint.
 #include "dembridge/dem/solver.h"
 
+#include "checkpoint_read.h"
+
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -116,34 +118,19 @@ void DemSolver::save_bars(const checkpoint::Group& g) const
 void DemSolver::load_bars(const checkpoint::Group& g)
 {
   Bars& b = _bars;
-  std::vector<std::int32_t> spheres;
-  g.read("bond_spheres", spheres);
-  std::vector<double> m;
-  g.read("m", m);
-  if (spheres != b.sphere || m != b.m)
-    g.fail("bond_spheres", "the bars or their bonds differ from this run's (another set-up)");
-  auto same = [&](const char* name, auto& v)
-  {
-    std::remove_reference_t<decltype(v)> r;
-    g.read(name, r);
-    if (r.size() != v.size())
-      g.fail(name, "holds " + std::to_string(r.size()) + " values, this run's bars " + std::to_string(v.size()));
-    v = std::move(r);
-  };
+  impl::check_same(g, "bond_spheres", b.sphere);
+  impl::check_same(g, "m", b.m);
   for (auto [name, v] : {std::pair{"x", &b.x}, {"v", &b.v}, {"f", &b.f}, {"plastic", &b.plastic},
                          {"alpha", &b.alpha}, {"force", &b.force}, {"length", &b.length}, {"tau", &b.tau},
                          {"slip", &b.slip}, {"slip_max", &b.slip_max}, {"gap", &b.gap}, {"gap_max", &b.gap_max},
                          {"surface", &b.surface}})
-    same(name, *v);
+    impl::read_same_size(g, name, *v);
   for (auto [name, v] : {std::pair{"broken", &b.broken}, {"open", &b.open}, {"held", &b.held},
                          {"bend_kept", &b.bend_kept}})
-    same(name, *v);
-  std::vector<std::int32_t> moved, group;
-  g.read("moved", moved);
-  g.read("moved_group", group);
-  if (moved != _bar_moved || group != _bar_group)
-    g.fail("moved", "the bar nodes moved differ from this run's (another set-up)");
-  same("fold", _bar_fold);
+    impl::read_same_size(g, name, *v);
+  impl::check_same(g, "moved", _bar_moved);
+  impl::check_same(g, "moved_group", _bar_group);
+  impl::read_same_size(g, "fold", _bar_fold);
   std::vector<double> reac;
   g.read("reaction", reac);
   if (reac.size() != 3 * _bar_reac.size())

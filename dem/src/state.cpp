@@ -6,6 +6,7 @@
 #include <array>
 #include <stdexcept>
 
+#include "checkpoint_read.h"
 #include "force_loop.h"
 
 namespace dembridge::dem
@@ -13,28 +14,8 @@ namespace dembridge::dem
 namespace
 {
 using checkpoint::Group;
-
-/// Reads `name` into v, which must keep its length (the run's set-up).
-template <typename T> void read_same_size(const Group& g, const std::string& name, std::vector<T>& v)
-{
-  std::vector<T> r;
-  g.read(name, r);
-  if (r.size() != v.size())
-    g.fail(name, "holds " + std::to_string(r.size()) + " values, this run has " + std::to_string(v.size())
-                     + " (the checkpoint is of another set-up)");
-  v = std::move(r);
-}
-
-/// Fails unless the stored `name` equals v: what the set-up fixes (radii,
-/// link ends) identifies the assembly the checkpoint belongs to.
-template <typename T> void check_same(const Group& g, const std::string& name, const std::vector<T>& v)
-{
-  std::vector<T> r;
-  g.read(name, r);
-  if (r != v)
-    g.fail(name, "differs from this run's (the checkpoint is of another assembly: restart with the "
-                 "options of the run that wrote it)");
-}
+using impl::check_same;
+using impl::read_same_size;
 
 /// The particle arrays a step changes (r is checked, quantum compared).
 template <typename P> auto particle_arrays(P& p) // P: Particles or const Particles

@@ -177,10 +177,10 @@ private:
     }
     _fraction = solid / (region.volume - bars_volume);
     const Material& mat = _s.material.material;
-    // the bars take their room: the spheres they overlap are left out (none
-    // of a packing generated around them, beyond its tolerance)
+    // a packing file's spheres that overlap a bar are left out (a generated
+    // packing was made around the bars: line_the_bars)
     std::vector<double> x = _pk.x, r = _pk.r;
-    if (_s.reinforcement.any())
+    if (_s.reinforcement.any() && !t.packing_file.empty())
       clear_bars(x, r);
     _p = make_particles(x, r, mat.density, _fraction);
     const auto bulk = bulk_spheres(region, _p.x, _p.r);
