@@ -418,10 +418,11 @@ TEST_CASE("pull-out of a bar from a DE cylinder follows the bond law", "[bars][p
   // elastic (strengths raised) so that the bond alone yields. The mean bond
   // stress F / (pi d L) against the slip of the loaded end follows the
   // given curve to within the packing's scatter: the bonded surface is the
-  // bar's exactly (shares per element), but where the slip concentrates
-  // depends on the spheres bonded near each element, and the concrete's
-  // and bar's elastic strains add ~0.05 mm to the end's slip. 10 % on the
-  // mean stress, from s1/2 to s3 (measured: within 5 %).
+  // bar's exactly (shares per element), but the concrete's and bar's
+  // elastic strains add up to 0.05 mm to the end's slip: on the rising
+  // branch (tau ~ s^0.4) that is at most 0.4 x 0.05 / 0.5 = 4 % of the
+  // stress at 0.5 mm, nothing on the plateau. 5 % from s1/2 to 4 mm
+  // (measured: 2.1 %).
   const double R = 0.04, H = 0.05, d = 0.010, rmean = 2.5e-3;
   const Region region = cylinder_region({0, 0, 0}, R, H);
   PackingOptions po;
@@ -481,7 +482,7 @@ TEST_CASE("pull-out of a bar from a DE cylinder follows the bond law", "[bars][p
     const double ref = bond_envelope(slip, bl);
     worst = std::max(worst, std::abs(tau / ref - 1.0));
     INFO("slip " << slip * 1e3 << " mm: mean bond stress " << tau / 1e6 << " MPa, curve " << ref / 1e6 << " MPa");
-    CHECK_THAT(tau, WithinRel(ref, 0.10));
+    CHECK_THAT(tau, WithinRel(ref, 0.05));
   }
   const auto e = s.energy();
   INFO("bond slip " << e.bar_slip << " J, imbalance " << e.imbalance() << " J of " << e.prescribed_work << " J");
