@@ -742,6 +742,56 @@ TEST_CASE("hinged displacement condition: the mean follows the history, the rota
                     Contains("hinged condition 'pull'") && Contains("sphere 5"));
 }
 
+TEST_CASE("hinge axis: a hinged set turns about that axis only", "[dem]")
+{
+  // The plate {b_i} (on a line along y, at z = 0) displaced by d along x,
+  // as in the test above, hinged about one axis through its centroid:
+  // - about z, the rotation moves x along y: the plate turns as when free,
+  //   u_i = d + beta (y_i - c);
+  // - about y, it moves x along z, where the plate has no extent: u_i = d;
+  // - about x, it does not move x at all: u_i = d.
+  // Each to the convergence of the damped run (1e-6, as above).
+  auto run = [](std::array<double, 3> axis, ThreeSprings& t)
+  {
+    const double K = t.k[0] + t.k[1] + t.k[2];
+    const double dt = 0.5 * critical_time_step(t.p, t.l);
+    const double c = 2.0 * std::sqrt(K / (t.p.m[1] + t.p.m[3] + t.p.m[5]));
+    DemSolver s(t.p, t.l, t.m, dt, c, 1e-4);
+    s.add_motion({"a", {0, 2, 4}, MotionKind::fixed, {true, true, true}, {}});
+    const double d = 1e-4 * t.r[0], ramp = 2000 * dt;
+    ParticleMotion pull{"pull", {1, 3, 5}, MotionKind::displacement, {true, false, false},
+                        [=](double time) { return d * std::min(1.0, time / ramp); }, true};
+    pull.axis = axis;
+    s.add_motion(pull);
+    s.start();
+    for (int i = 0; i < 40000; ++i)
+      s.step();
+    return d;
+  };
+  ThreeSprings free_plate, about_z, about_y, about_x;
+  run({0.0, 0.0, 0.0}, free_plate);
+  run({0.0, 0.0, 2.0}, about_z); // any length
+  const double d = run({0.0, 1.0, 0.0}, about_y);
+  run({1.0, 0.0, 0.0}, about_x);
+  for (int i = 0; i < 3; ++i)
+  {
+    INFO("sphere b" << i + 1);
+    CHECK_THAT(about_z.u(i), WithinRel(free_plate.u(i), 1e-6));
+    CHECK_THAT(about_y.u(i), WithinRel(d, 1e-6));
+    CHECK_THAT(about_x.u(i), WithinRel(d, 1e-6));
+  }
+  CHECK(std::abs(about_z.u(2) - about_z.u(0)) > 0.05 * d); // it turned
+
+  ThreeSprings t;
+  DemSolver s(t.p, t.l, t.m, 1e-9, 0.0, 1e-4);
+  ParticleMotion held{"held", {1}, MotionKind::fixed, {true, true, true}, {}, true};
+  held.axis = {0.0, 1.0, 0.0};
+  CHECK_THROWS_WITH(s.add_motion(held), Contains("'held'") && Contains("hinge axis needs a rotating"));
+  ParticleMotion bad{"bad", {1}, MotionKind::velocity, {true, true, true}, [](double) { return 0.0; }, true};
+  bad.axis = {0.0, std::nan(""), 0.0};
+  CHECK_THROWS_WITH(s.add_motion(bad), Contains("'bad'") && Contains("finite"));
+}
+
 TEST_CASE("skin compensation: the links of the face spheres stiffened by the bulk's links per sphere", "[dem]")
 {
   // Simple cubic lattice of equal spheres (8 a side, spacing 2R): linked to

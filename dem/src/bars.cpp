@@ -1,5 +1,7 @@
 #include "dembridge/dem/bars.h"
 
+#include "bar_grid.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -11,6 +13,11 @@
 
 namespace dembridge::dem
 {
+using impl::bar_radius;
+using impl::element_grid;
+using impl::ElementGrid;
+using impl::max_bar_radius;
+using impl::nearest_element;
 namespace
 {
 [[noreturn]] void refuse(const std::string& what, double v, const std::string& allowed)
@@ -283,107 +290,6 @@ std::array<double, 2> distance_to_element(const Bars& bars, std::size_t e, const
   return {std::sqrt(dot(q, q)), xi};
 }
 
-namespace
-{
-/// The bars' elements by cells of a uniform grid: each element listed in
-/// every cell its box, grown by `reach`, touches; a query looks in its own
-/// cell only, and finds every element within `reach` of it (a point
-/// outside the grid has none).
-struct ElementGrid
-{
-  Point lo{};
-  double cell = 1.0;
-  int n[3] = {1, 1, 1};
-  std::vector<std::vector<std::int32_t>> lists;
-  std::int64_t index(const Point& x) const
-  {
-    std::int64_t id = 0;
-    for (int k = 0; k < 3; ++k)
-    {
-      const double f = (x[k] - lo[k]) / cell;
-      if (!(f >= 0.0 && f < n[k]))
-        return -1;
-      id = id * n[k] + static_cast<std::int64_t>(f);
-    }
-    return id;
-  }
-  std::span<const std::int32_t> near(const double* x) const
-  {
-    const std::int64_t id = index({x[0], x[1], x[2]});
-    return id < 0 ? std::span<const std::int32_t>{} : std::span<const std::int32_t>(lists[id]);
-  }
-};
-
-/// The grid of the elements for queries within `reach` of them, cells of
-/// max(longest element, reach / 4) over the bars' box grown by reach.
-ElementGrid element_grid(const Bars& bars, double reach)
-{
-  ElementGrid grid;
-  if (bars.elements() == 0)
-    return grid;
-  Point lo{bars.x[0], bars.x[1], bars.x[2]}, hi = lo;
-  double lmax = 0.0;
-  for (std::size_t q = 0; q < bars.nodes(); ++q)
-    for (int k = 0; k < 3; ++k)
-    {
-      lo[k] = std::min(lo[k], bars.x[3 * q + k]);
-      hi[k] = std::max(hi[k], bars.x[3 * q + k]);
-    }
-  for (double l : bars.l0)
-    lmax = std::max(lmax, l);
-  grid.cell = std::max(lmax, 0.25 * reach);
-  for (int k = 0; k < 3; ++k)
-  {
-    grid.lo[k] = lo[k] - reach;
-    grid.n[k] = static_cast<int>(std::ceil((hi[k] - lo[k] + 2.0 * reach) / grid.cell)) + 1;
-  }
-  grid.lists.resize(std::size_t(grid.n[0]) * grid.n[1] * grid.n[2]);
-  for (std::size_t e = 0; e < bars.elements(); ++e)
-  {
-    int c0[3], c1[3];
-    for (int k = 0; k < 3; ++k)
-    {
-      const double a = bars.x[3 * bars.a[e] + k], b = bars.x[3 * bars.b[e] + k];
-      c0[k] = std::max(0, static_cast<int>(std::floor((std::min(a, b) - reach - grid.lo[k]) / grid.cell)));
-      c1[k] = std::min(grid.n[k] - 1, static_cast<int>(std::floor((std::max(a, b) + reach - grid.lo[k]) / grid.cell)));
-    }
-    for (int i = c0[0]; i <= c1[0]; ++i)
-      for (int j = c0[1]; j <= c1[1]; ++j)
-        for (int k = c0[2]; k <= c1[2]; ++k)
-          grid.lists[(std::size_t(i) * grid.n[1] + j) * grid.n[2] + k].push_back(static_cast<std::int32_t>(e));
-  }
-  return grid;
-}
-
-/// The nearest element to x within `limit(e)` (<= the grid's reach) of its
-/// axis: {element, xi, distance}, element -1 if none.
-template <typename Limit>
-std::tuple<std::int64_t, double, double> nearest_element(const Bars& bars, const ElementGrid& grid, const double* x,
-                                                         Limit&& limit)
-{
-  std::int64_t best = -1;
-  double bxi = 0.0, bd = std::numeric_limits<double>::infinity();
-  for (const std::int32_t e : grid.near(x))
-  {
-    const auto [d, xi] = distance_to_element(bars, e, x);
-    if (d < limit(e) && d < bd)
-    {
-      best = e;
-      bd = d;
-      bxi = xi;
-    }
-  }
-  return {best, bxi, bd};
-}
-double bar_radius(const Bars& bars, std::size_t e) { return std::sqrt(bars.area[e] / std::numbers::pi); }
-double max_bar_radius(const Bars& bars)
-{
-  double rb = 0.0;
-  for (std::size_t e = 0; e < bars.elements(); ++e)
-    rb = std::max(rb, bar_radius(bars, e));
-  return rb;
-}
-} // namespace
 
 std::vector<std::uint8_t> spheres_on_bars(const Bars& bars, std::span<const double> centres,
                                           std::span<const double> radii, double tolerance)
@@ -785,13 +691,13 @@ double bar_body_energy(const Bars& bars, const RigidBody& b)
   return e;
 }
 
-void add_bar_rows(const Bars& bars, const Particles& p, std::vector<double>& sphere_rows,
+void add_bar_rows(const Bars& bars, const Particles& p, const Material& m, std::vector<double>& sphere_rows,
                   std::vector<double>& node_rows)
 {
   // Gershgorin on M^-1/2 K M^-1/2: row i sums |K_ij| / sqrt(m_i m_j). An
   // element couples its two nodes with EA/l0; a bond its sphere C and its
-  // point (1 - xi) A + xi B with k = max(K0, k_r) S (the lever terms of the
-  // bond's forces, offsets over element lengths, are left out).
+  // point (1 - xi) A + xi B with k = max(K0 S, k_r S, K_contact), the
+  // contact with the bar (BarContacts) taking over once the bond opens.
   node_rows.assign(bars.nodes(), 0.0);
   for (std::size_t n = 0; n < bars.nodes(); ++n)
     node_rows[n] += bars.node_k[n] / bars.m[n]; // a body's contact (its mass far above)
@@ -823,8 +729,9 @@ void add_bar_rows(const Bars& bars, const Particles& p, std::vector<double>& sph
     if (bars.open[b])
       continue;
     const BondLaw& law = bars.bond_laws[bars.bond_law[bars.element[b]]];
-    const double k = std::max(law.k0(), law.radial_stiffness) * bars.surface[b];
     const std::size_t e = bars.element[b], c = bars.sphere[b];
+    const double k = std::max(std::max(law.k0(), law.radial_stiffness) * bars.surface[b],
+                              body_contact_stiffness(m, p.r[c]));
     // the node factors of the bond's forces, their lever terms included
     // (the offset from the axis and along it, over the element's length)
     const BondGeometry g = bond_geometry(bars, p, b);

@@ -66,6 +66,12 @@ void DemSolver::add_motion(ParticleMotion m)
   for (auto i : m.ids)
     if (i < 0 || static_cast<std::size_t>(i) >= _p.size())
       throw std::runtime_error("condition '" + m.name + "': sphere index out of range");
+  const bool has_axis = m.axis[0] != 0.0 || m.axis[1] != 0.0 || m.axis[2] != 0.0;
+  if (has_axis && !(std::isfinite(m.axis[0]) && std::isfinite(m.axis[1]) && std::isfinite(m.axis[2])))
+    throw std::runtime_error("condition '" + m.name + "': the hinge axis must be finite");
+  if (has_axis && !m.hinged())
+    throw std::runtime_error("condition '" + m.name
+                             + "': a hinge axis needs a rotating velocity or displacement condition");
   for (const auto& f : _forces)
     if (f.plate)
       for (auto i : m.ids)
@@ -149,7 +155,9 @@ namespace
 {
 /// The motions of a plate (a set of spheres) along a unit direction d: its
 /// translation, and (with `rotates`) its two rotations normal to d, whose
-/// component along d is linear in the position across d. The rotation
+/// component along d is linear in the position across d, or with a
+/// non-zero `axis` only the rotation about it (linear along d x axis;
+/// none when d is along the axis). The rotation
 /// modes are mass-orthonormalised (Gram-Schmidt); one the spheres do not
 /// span (all on one line across d, or a single sphere) is dropped, as it
 /// moves no sphere.
@@ -160,8 +168,43 @@ struct PlateModes
   std::vector<std::array<double, 2>> phi; ///< per sphere, the rotation modes' v_d
 };
 
+/// e0, e1: an orthonormal pair normal to the unit d, the directions across
+/// which a plate's rotations move its d component; with a non-zero axis,
+/// e0 = d x axis / |d x axis| alone and e1 = 0 (spans nothing, dropped).
+/// False when d lies along the axis: the hinge does not turn it.
+bool rotation_directions(const double* d, const std::array<double, 3>& axis, double (&e)[2][3])
+{
+  auto cross = [](const double* a, const double* b, double* out)
+  {
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+  };
+  const double a2 = dot3(axis.data(), axis.data());
+  if (a2 > 0.0)
+    cross(d, axis.data(), e[0]);
+  else
+  {
+    double t[3] = {0.0, 0.0, 0.0};
+    t[std::abs(d[0]) < 0.9 ? 0 : 1] = 1.0;
+    const double td = dot3(t, d);
+    for (int k = 0; k < 3; ++k)
+      e[0][k] = t[k] - td * d[k];
+  }
+  const double n0 = std::sqrt(dot3(e[0], e[0]));
+  if (!(n0 > 1e-12 * (a2 > 0.0 ? std::sqrt(a2) : 1.0)))
+    return false;
+  for (int k = 0; k < 3; ++k)
+    e[0][k] /= n0;
+  if (a2 > 0.0)
+    std::fill(&e[1][0], &e[1][0] + 3, 0.0);
+  else
+    cross(d, e[0], e[1]);
+  return true;
+}
+
 PlateModes plate_modes(const Particles& p, const std::vector<std::int32_t>& ids, const double* d,
-                       bool rotates)
+                       bool rotates, const std::array<double, 3>& axis = {0.0, 0.0, 0.0})
 {
   PlateModes pm;
   double c[3] = {0.0, 0.0, 0.0};
@@ -175,18 +218,9 @@ PlateModes plate_modes(const Particles& p, const std::vector<std::int32_t>& ids,
     return pm;
   for (int k = 0; k < 3; ++k)
     c[k] /= pm.mass;
-  // e0, e1: an orthonormal pair normal to d
-  double e[2][3], t[3] = {0.0, 0.0, 0.0};
-  t[std::abs(d[0]) < 0.9 ? 0 : 1] = 1.0;
-  const double td = dot3(t, d);
-  for (int k = 0; k < 3; ++k)
-    e[0][k] = t[k] - td * d[k];
-  const double n0 = std::sqrt(dot3(e[0], e[0]));
-  for (int k = 0; k < 3; ++k)
-    e[0][k] /= n0;
-  e[1][0] = d[1] * e[0][2] - d[2] * e[0][1];
-  e[1][1] = d[2] * e[0][0] - d[0] * e[0][2];
-  e[1][2] = d[0] * e[0][1] - d[1] * e[0][0];
+  double e[2][3];
+  if (!rotation_directions(d, axis, e))
+    return pm;
   pm.phi.resize(ids.size());
   double s2 = 0.0;
   for (std::size_t q = 0; q < ids.size(); ++q)
@@ -266,7 +300,7 @@ void DemSolver::move_hinged(std::size_t motion, double t_half, double t_new, boo
     if (!m.components[k])
       continue;
     const double d[3] = {k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0, k == 2 ? 1.0 : 0.0};
-    const auto pm = plate_modes(_p, m.ids, d, true);
+    const auto pm = plate_modes(_p, m.ids, d, true, m.axis);
     double& vprev = _motion_vprev[motion][k];
     double vbar = 0.0;
     if (m.kind == MotionKind::velocity)

@@ -135,7 +135,7 @@ double critical_time_step(const Particles& p, const Links& l, const Material& m,
 {
   std::vector<double> rt, rr, nodes;
   body_rows(p, l, m, rt, rr);
-  add_bar_rows(bars, p, rt, nodes);
+  add_bar_rows(bars, p, m, rt, nodes);
   const double spheres = step_from_rows(rt, rr);
   const double lmax = nodes.empty() ? 0.0 : *std::max_element(nodes.begin(), nodes.end());
   return lmax > 0.0 ? std::min(spheres, 2.0 / std::sqrt(lmax)) : spheres;

@@ -176,6 +176,8 @@ void DemSolver::start()
   if (_has_bars)
   {
     bar_forces(_bars, _p, false);
+    refresh_bar_contacts(_bars, _p, _bar_contacts, _nl, _removed);
+    bar_contact_forces(_bars, _p, _bar_contacts, _mat, _removed);
     for (auto& b : _bodies)
       bar_body_forces(_bars, b);
   }
@@ -468,6 +470,8 @@ void DemSolver::end_step()
     const BarWork bw = bar_forces(_bars, _p, true, _removed);
     _e.bar_slip += bw.slip;
     _e.bar_broken += bw.broken;
+    refresh_bar_contacts(_bars, _p, _bar_contacts, _nl, _removed);
+    bar_contact_forces(_bars, _p, _bar_contacts, _mat, _removed);
     for (auto& b : _bodies)
       bar_body_forces(_bars, b);
   }
@@ -570,7 +574,7 @@ DemEnergy DemSolver::energy() const
   }
   const BarEnergy be = bar_energy(_bars, _p);
   e.bar_kinetic = be.kinetic;
-  e.bar_elastic = be.elastic;
+  e.bar_elastic = be.elastic + (_has_bars ? bar_contact_energy(_bars, _p, _bar_contacts, _mat, _removed) : 0.0);
   e.bar_plastic = be.plastic;
   e.bar_opening = be.opening;
   return e;

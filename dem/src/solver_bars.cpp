@@ -113,6 +113,11 @@ void DemSolver::save_bars(const checkpoint::Group& g) const
   for (const auto& r : _bar_reac)
     reac.insert(reac.end(), r.begin(), r.end());
   g.write("reaction", reac);
+  g.write("contact_spheres", _bar_contacts.sphere);
+  g.write("contact_elements", _bar_contacts.element);
+  g.write("contact_x_refresh", _bar_contacts.x_refresh);
+  g.write("contact_version", std::vector<std::int64_t>{static_cast<std::int64_t>(_bar_contacts.version),
+                                                      _bar_contacts.refreshed ? 1 : 0});
 }
 
 void DemSolver::load_bars(const checkpoint::Group& g)
@@ -138,6 +143,24 @@ void DemSolver::load_bars(const checkpoint::Group& g)
   for (std::size_t q = 0; q < _bar_reac.size(); ++q)
     for (int k = 0; k < 3; ++k)
       _bar_reac[q][k] = reac[3 * q + k];
+  BarContacts& c = _bar_contacts;
+  g.read("contact_spheres", c.sphere);
+  g.read("contact_elements", c.element);
+  if (c.sphere.size() != c.element.size())
+    g.fail("contact_elements", "not one per contact sphere");
+  for (std::size_t q = 0; q < c.sphere.size(); ++q)
+    if (c.sphere[q] < 0 || static_cast<std::size_t>(c.sphere[q]) >= _p.size() || c.element[q] < 0
+        || static_cast<std::size_t>(c.element[q]) >= b.elements())
+      g.fail("contact_spheres", "a pair names a sphere or element out of range (another set-up)");
+  g.read("contact_x_refresh", c.x_refresh);
+  if (!c.x_refresh.empty() && c.x_refresh.size() != b.x.size())
+    g.fail("contact_x_refresh", "not 3 values per bar node (another set-up)");
+  std::vector<std::int64_t> version;
+  g.read("contact_version", version);
+  if (version.size() != 2)
+    g.fail("contact_version", "not {version, refreshed}");
+  c.version = static_cast<std::size_t>(version[0]);
+  c.refreshed = version[1] != 0;
 }
 
 } // namespace dembridge::dem

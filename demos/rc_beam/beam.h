@@ -24,6 +24,8 @@ struct BeamConfig
   int bars = 2;               ///< bars at the bottom, along the beam
   double bar_diameter = 6e-3; ///< [m]
   double cover = 0.02;        ///< bottom face to the bars' axes [m]
+  bool skin_compensation = true; ///< stiffen the links of the spheres near the faces (dem/skin.h)
+  bool hinged_supports = true; ///< the supports turn about their lines (false: held bands)
   dem::Steel steel;
   dem::BondLaw bond;
   dem::Material material;
@@ -47,7 +49,8 @@ struct BeamConfig
 /// Section theory of the beam (transformed sections, n = E_s / E):
 /// uncracked (bars as n - 1 times their area) and fully cracked (concrete
 /// in tension ignored) second moments, the cracking moment f_ct,fl I / y_t
-/// (the flexural tensile strength of EC2 / MC2010, max(1.6 - h[m], 1) sigma_t),
+/// (the flexural tensile strength of fib MC2010, (1 + 0.06 h^0.7) / (0.06 h^0.7)
+/// sigma_t with h in mm; Eurocode 2's max(1.6 - h[m], 1) sigma_t beside it),
 /// the first-yield moment A_s f_y (d - c / 3), and the deflection at a
 /// midspan load P, integrating the curvature M / (E I) with I uncracked
 /// where |M| < M_cr and cracked elsewhere, plus the shear deflection
@@ -57,7 +60,8 @@ struct BeamTheory
   double n = 0.0, d = 0.0;                 ///< modular ratio; depth of the bars [m]
   double i_uncracked = 0.0, y_uncracked = 0.0; ///< [m^4]; neutral axis from the top [m]
   double i_cracked = 0.0, c_cracked = 0.0;   ///< [m^4]; neutral axis from the top [m]
-  double f_ct_fl = 0.0;                      ///< flexural tensile strength [Pa]
+  double f_ct_fl = 0.0;                      ///< flexural tensile strength (MC2010) [Pa]
+  double f_ct_fl_ec2 = 0.0;                  ///< the same of Eurocode 2 [Pa]
   double m_cracking = 0.0, p_cracking = 0.0; ///< [N m], [N]
   double m_yield = 0.0, p_yield = 0.0;       ///< [N m], [N]
   double deflection(const BeamConfig& c, double load) const; ///< [m]

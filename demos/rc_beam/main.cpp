@@ -70,6 +70,18 @@ int main(int argc, char** argv)
   demo::add_integer(app, "--bars", c.bars, "number of bars at the bottom", Allowed::closed(1, 100));
   demo::add_number(app, "--bar-diameter", c.bar_diameter, "bar diameter [m]", Allowed::positive(1.0));
   demo::add_number(app, "--cover", c.cover, "bottom face to the bars' axes [m]", Allowed::positive(10.0));
+  std::string skin = c.skin_compensation ? "true" : "false";
+  demo::add_choice(app, "--skin-compensation", skin,
+                   "stiffen the links of the spheres within 2 Rmax of a face by their bulk's links per sphere over "
+                   "their own",
+                   "true | false")
+      ->each([&](const std::string& s) { c.skin_compensation = s == "true"; });
+  std::string supports = "hinged";
+  demo::add_choice(app, "--supports", supports,
+                   "the supports' spheres: hinged (the band turns about its line, as on a roller bearing) or held "
+                   "(at rest: the band clamps the beam's rotation over its width)",
+                   "hinged | held")
+      ->each([&](const std::string& s) { c.hinged_supports = s == "hinged"; });
   demo::add_number(app, "--steel-yield", c.steel.yield, "steel yield strength f_y [Pa]", Allowed::positive(1e11));
   demo::add_number(app, "--steel-hardening", c.steel.hardening, "steel hardening modulus H [Pa]",
                    Allowed::non_negative(1e13));

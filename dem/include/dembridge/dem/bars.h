@@ -10,6 +10,7 @@
 
 #include "dembridge/dem/assembly.h"
 #include "dembridge/dem/body.h"
+#include "dembridge/dem/neighbours.h"
 #include "dembridge/dem/packing.h"
 
 #include <array>
@@ -214,11 +215,49 @@ void bar_body_forces(Bars& bars, RigidBody& b);
 /// The elastic energy of those contacts, K delta^2 / 2 summed [J].
 double bar_body_energy(const Bars& bars, const RigidBody& b);
 
+/// The contacts of spheres with the bars beyond their bonds: a sphere with
+/// no intact bond whose surface overlaps a bar, delta = r + r_b - rho > 0
+/// (rho: its centre's distance to the axis of the bar's nearest unbroken
+/// element, r_b the bar's radius), is pushed out along the normal from the
+/// axis through its centre with K delta. K is the stiffness of a sphere on a
+/// rigid body (body_contact_stiffness: the steel is far stiffer than the
+/// concrete). Frictionless, so no history. The element's nodes take the
+/// opposite force in the shares 1 - xi and xi of the nearest point, so the
+/// forces sum to zero with zero moment and are the gradient of K delta^2 / 2.
+/// Per sphere and bar (polyline) only the nearest element acts: a sphere
+/// at a node between two elements is pushed once. A sphere with an intact
+/// bond is left to its bond's radial spring on that bar, and touches the
+/// others.
+struct BarContacts
+{
+  std::vector<std::int32_t> sphere, element; ///< candidate pairs, by sphere then element
+  std::vector<double> x_refresh;             ///< the bar nodes at the last refresh (3 per node)
+  std::size_t version = 0;                   ///< the neighbour list's version then
+  bool refreshed = false;
+  std::vector<std::int32_t> bonded;          ///< scratch: 1 + the bar a sphere has an intact bond to, or 0
+};
+/// Refreshes the candidate pairs, every sphere not `gone` whose centre
+/// lies within r + r_b + 2 skin of an element's axis, when the neighbour
+/// list was rebuilt or a bar node moved more than skin/2 since the last
+/// refresh: a sphere moves less than skin/2 from its place at the last
+/// build, so no other pair can touch before the next refresh.
+void refresh_bar_contacts(const Bars& bars, const Particles& p, BarContacts& c, const NeighbourList& nl,
+                          std::span<const std::uint8_t> gone = {});
+/// Adds the contacts' forces to p.f and bars.f (after bar_forces, which
+/// resets bars.f; the bonds' state of this step decides which spheres are
+/// bonded).
+void bar_contact_forces(Bars& bars, Particles& p, BarContacts& c, const Material& m,
+                        std::span<const std::uint8_t> gone = {});
+/// The contacts' elastic energy, K delta^2 / 2 summed [J].
+double bar_contact_energy(const Bars& bars, const Particles& p, const BarContacts& c, const Material& m,
+                          std::span<const std::uint8_t> gone = {});
 /// Adds the bars' Gershgorin rows (of M^-1/2 K M^-1/2, [1/s^2]) to the
 /// spheres' translation rows (their bonds) and fills the nodes' (elements
 /// and bonds, and one body contact per node): critical_time_step(p, l, m,
-/// bars) takes 2 / sqrt(largest).
-void add_bar_rows(const Bars& bars, const Particles& p, std::vector<double>& sphere_rows,
+/// bars) takes 2 / sqrt(largest). A bond counts with the larger of its own
+/// stiffness and its sphere's contact with the bar (BarContacts), which
+/// takes over once the bond opens.
+void add_bar_rows(const Bars& bars, const Particles& p, const Material& m, std::vector<double>& sphere_rows,
                   std::vector<double>& node_rows);
 
 } // namespace dembridge::dem

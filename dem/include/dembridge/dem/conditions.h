@@ -41,6 +41,13 @@ struct ParticleMotion
   /// shares no sphere with another condition or a loading plate. Without it
   /// each sphere follows value(t): the set cannot rotate.
   bool rotates = false;
+  /// With `rotates`: a non-zero axis [any length] makes the set a hinge
+  /// about that axis through its centroid: component k becomes affine
+  /// along e_k x axis only (the one direction a rotation about the axis
+  /// moves it along), so a support line hinged about y lets a beam along x
+  /// turn in its plane of bending and holds its roll and its twist. Zero:
+  /// both rotations normal to each component are free.
+  std::array<double, 3> axis{0.0, 0.0, 0.0};
   /// A hinged set: it rotates and moves (a fixed set holds everything).
   bool hinged() const { return rotates && kind != MotionKind::fixed; }
 };

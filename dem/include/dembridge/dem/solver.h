@@ -43,7 +43,7 @@ struct DemEnergy
   /// energy and the elastic energy of their links and contacts then.
   double removed = 0.0;
   double bar_kinetic = 0.0; ///< the bar nodes' kinetic energy
-  double bar_elastic = 0.0; ///< the bars' steel and bonds (bars.h: BarEnergy)
+  double bar_elastic = 0.0; ///< the bars' steel and bonds (bars.h: BarEnergy) and the spheres' contacts with them
   double bar_plastic = 0.0; ///< the steel's plastic work (a state)
   double bar_opening = 0.0; ///< the bonds' radial softening (a state)
   double bar_slip = 0.0;    ///< dissipated by the bonds' slip beyond their envelope
@@ -223,6 +223,7 @@ private:
   void drift_bodies();
   void contact_bodies(double dt);
   Bars _bars;
+  BarContacts _bar_contacts; // spheres on the bars beyond their bonds
   bool _has_bars = false;
   std::vector<std::int32_t> _bar_moved; // nodes with a prescribed velocity
   std::vector<std::int32_t> _bar_group; // the group of each (move_bar_nodes' call)

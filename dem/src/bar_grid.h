@@ -1,0 +1,115 @@
+#pragma once
+// The bars' elements on a grid of cells, for the queries of spheres near
+// them (bars.cpp: the packing's room and the bonds; bar_contacts.cpp).
+#include "dembridge/dem/bars.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <span>
+#include <tuple>
+#include <vector>
+
+namespace dembridge::dem::impl
+{
+/// The bars' elements by cells of a uniform grid: each element listed in
+/// every cell its box, grown by `reach`, touches; a query looks in its own
+/// cell only, and finds every element within `reach` of it (a point
+/// outside the grid has none).
+struct ElementGrid
+{
+  Point lo{};
+  double cell = 1.0;
+  int n[3] = {1, 1, 1};
+  std::vector<std::vector<std::int32_t>> lists;
+  std::int64_t index(const Point& x) const
+  {
+    std::int64_t id = 0;
+    for (int k = 0; k < 3; ++k)
+    {
+      const double f = (x[k] - lo[k]) / cell;
+      if (!(f >= 0.0 && f < n[k]))
+        return -1;
+      id = id * n[k] + static_cast<std::int64_t>(f);
+    }
+    return id;
+  }
+  std::span<const std::int32_t> near(const double* x) const
+  {
+    const std::int64_t id = index({x[0], x[1], x[2]});
+    return id < 0 ? std::span<const std::int32_t>{} : std::span<const std::int32_t>(lists[id]);
+  }
+};
+
+/// The grid of the elements for queries within `reach` of them, cells of
+/// max(longest element, reach / 4) over the bars' box grown by reach.
+inline ElementGrid element_grid(const Bars& bars, double reach)
+{
+  ElementGrid grid;
+  if (bars.elements() == 0)
+    return grid;
+  Point lo{bars.x[0], bars.x[1], bars.x[2]}, hi = lo;
+  double lmax = 0.0;
+  for (std::size_t q = 0; q < bars.nodes(); ++q)
+    for (int k = 0; k < 3; ++k)
+    {
+      lo[k] = std::min(lo[k], bars.x[3 * q + k]);
+      hi[k] = std::max(hi[k], bars.x[3 * q + k]);
+    }
+  for (double l : bars.l0)
+    lmax = std::max(lmax, l);
+  grid.cell = std::max(lmax, 0.25 * reach);
+  for (int k = 0; k < 3; ++k)
+  {
+    grid.lo[k] = lo[k] - reach;
+    grid.n[k] = static_cast<int>(std::ceil((hi[k] - lo[k] + 2.0 * reach) / grid.cell)) + 1;
+  }
+  grid.lists.resize(std::size_t(grid.n[0]) * grid.n[1] * grid.n[2]);
+  for (std::size_t e = 0; e < bars.elements(); ++e)
+  {
+    int c0[3], c1[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      const double a = bars.x[3 * bars.a[e] + k], b = bars.x[3 * bars.b[e] + k];
+      c0[k] = std::max(0, static_cast<int>(std::floor((std::min(a, b) - reach - grid.lo[k]) / grid.cell)));
+      c1[k] = std::min(grid.n[k] - 1, static_cast<int>(std::floor((std::max(a, b) + reach - grid.lo[k]) / grid.cell)));
+    }
+    for (int i = c0[0]; i <= c1[0]; ++i)
+      for (int j = c0[1]; j <= c1[1]; ++j)
+        for (int k = c0[2]; k <= c1[2]; ++k)
+          grid.lists[(std::size_t(i) * grid.n[1] + j) * grid.n[2] + k].push_back(static_cast<std::int32_t>(e));
+  }
+  return grid;
+}
+
+/// The nearest element to x within `limit(e)` (<= the grid's reach) of its
+/// axis: {element, xi, distance}, element -1 if none.
+template <typename Limit>
+std::tuple<std::int64_t, double, double> nearest_element(const Bars& bars, const ElementGrid& grid, const double* x,
+                                                         Limit&& limit)
+{
+  std::int64_t best = -1;
+  double bxi = 0.0, bd = std::numeric_limits<double>::infinity();
+  for (const std::int32_t e : grid.near(x))
+  {
+    const auto [d, xi] = distance_to_element(bars, e, x);
+    if (d < limit(e) && d < bd)
+    {
+      best = e;
+      bd = d;
+      bxi = xi;
+    }
+  }
+  return {best, bxi, bd};
+}
+inline double bar_radius(const Bars& bars, std::size_t e) { return std::sqrt(bars.area[e] / std::numbers::pi); }
+inline double max_bar_radius(const Bars& bars)
+{
+  double rb = 0.0;
+  for (std::size_t e = 0; e < bars.elements(); ++e)
+    rb = std::max(rb, bar_radius(bars, e));
+  return rb;
+}
+} // namespace dembridge::dem::impl
