@@ -7,11 +7,41 @@
 
 #include <algorithm>
 #include <cmath>
+#include <omp.h>
 
 namespace dembridge::dem
 {
+/// The grid of the elements, built for queries within `reach` + `margin`
+/// of them from the nodes at `x`: it finds every element within `reach` of
+/// a point while no node has moved more than `margin` from `x`.
+struct BarGridCache
+{
+  impl::ElementGrid grid;
+  std::vector<double> x;
+  double reach = 0.0, margin = 0.0;
+};
+
 namespace
 {
+/// The cached grid if it still serves queries within `reach`, else a new one.
+std::shared_ptr<const BarGridCache> bar_grid(const Bars& bars, std::shared_ptr<const BarGridCache> cache,
+                                             double reach, double margin)
+{
+  bool fresh = cache && cache->reach >= reach && cache->x.size() == bars.x.size();
+  for (std::size_t n = 0; fresh && n < bars.nodes(); ++n)
+    fresh = std::hypot(bars.x[3 * n] - cache->x[3 * n], bars.x[3 * n + 1] - cache->x[3 * n + 1],
+                       bars.x[3 * n + 2] - cache->x[3 * n + 2])
+            <= cache->margin;
+  if (fresh)
+    return cache;
+  auto g = std::make_shared<BarGridCache>();
+  g->grid = impl::element_grid(bars, reach + margin);
+  g->x = bars.x;
+  g->reach = reach;
+  g->margin = margin;
+  return g;
+}
+
 bool is_gone(std::span<const std::uint8_t> gone, std::int32_t i) { return !gone.empty() && gone[i]; }
 
 /// For each sphere, 1 + the bar (line) it has an intact bond to, or 0.
@@ -57,22 +87,23 @@ void for_each_touch(const Bars& bars, const Particles& p, const BarContacts& c, 
     {
       const std::int32_t line = bars.line[c.element[q]];
       Touch best{i, -1, 0.0, 0.0, {0.0, 0.0, 0.0}};
-      double rho_best = 0.0;
+      double rho2_best = 0.0;
       for (; q < end && bars.line[c.element[q]] == line; ++q)
       {
         const std::int32_t e = c.element[q];
         if (bars.broken[e])
           continue;
-        const auto [rho, xi] = distance_to_element(bars, e, x);
-        if (best.element < 0 || rho < rho_best)
+        const auto [rho2, xi] = impl::distance2_to_element(bars, e, x);
+        if (best.element < 0 || rho2 < rho2_best)
         {
           best.element = e;
           best.xi = xi;
-          rho_best = rho;
+          rho2_best = rho2;
         }
       }
       if (best.element < 0 || flags[i] == 1 + line)
         continue;
+      const double rho_best = std::sqrt(rho2_best);
       best.delta = p.r[i] + impl::bar_radius(bars, best.element) - rho_best;
       if (!(best.delta > 0.0) || !(rho_best > 0.0))
         continue; // apart, or the centre on the axis (no normal; a sphere never gets there)
@@ -84,43 +115,70 @@ void for_each_touch(const Bars& bars, const Particles& p, const BarContacts& c, 
     }
   }
 }
+/// The largest distance between the points x and their places x0 (3 per
+/// point), those flagged in `gone` left out.
+double largest_move(std::span<const double> x0, std::span<const double> x, std::span<const std::uint8_t> gone)
+{
+  double m2 = 0.0;
+  for (std::size_t i = 0; i < x.size() / 3; ++i)
+  {
+    if (is_gone(gone, static_cast<std::int32_t>(i)))
+      continue;
+    const double d0 = x[3 * i] - x0[3 * i], d1 = x[3 * i + 1] - x0[3 * i + 1], d2 = x[3 * i + 2] - x0[3 * i + 2];
+    m2 = std::max(m2, d0 * d0 + d1 * d1 + d2 * d2);
+  }
+  return std::sqrt(m2);
+}
 } // namespace
 
 void refresh_bar_contacts(const Bars& bars, const Particles& p, BarContacts& c, const NeighbourList& nl,
                           std::span<const std::uint8_t> gone)
 {
+  // a pair left out at the refresh had a gap of at least 2 skin: it can
+  // close only once the largest move of a sphere plus that of a node since
+  // then reach it
   const double skin = nl.skin();
-  bool stale = !c.refreshed || c.version != nl.version() || c.x_refresh.size() != bars.x.size();
-  for (std::size_t n = 0; !stale && n < bars.nodes(); ++n)
-    stale = std::hypot(bars.x[3 * n] - c.x_refresh[3 * n], bars.x[3 * n + 1] - c.x_refresh[3 * n + 1],
-                       bars.x[3 * n + 2] - c.x_refresh[3 * n + 2])
-            > 0.5 * skin;
-  if (!stale)
+  if (c.refreshed && c.x_refresh.size() == bars.x.size() && c.x_spheres.size() == p.x.size()
+      && largest_move(c.x_spheres, p.x, gone) + largest_move(c.x_refresh, bars.x, {}) < 2.0 * skin)
     return;
   c.sphere.clear();
   c.element.clear();
   c.x_refresh = bars.x;
-  c.version = nl.version();
+  c.x_spheres = p.x;
   c.refreshed = true;
   if (bars.elements() == 0 || p.size() == 0)
     return;
   const double rmax = *std::max_element(p.r.begin(), p.r.end());
-  const impl::ElementGrid grid = impl::element_grid(bars, rmax + impl::max_bar_radius(bars) + 2.0 * skin);
-  std::vector<std::int32_t> near;
-  for (std::size_t i = 0; i < p.size(); ++i)
+  c.grid = bar_grid(bars, c.grid, rmax + impl::max_bar_radius(bars) + 2.0 * skin, 2.0 * skin);
+  const impl::ElementGrid& grid = c.grid->grid;
+  // each thread scans a contiguous range of spheres; the ranges joined in
+  // order give the same pairs, by sphere then element, on any thread count
+  std::vector<std::vector<std::int32_t>> spheres(omp_get_max_threads()), elements(spheres.size());
+#pragma omp parallel
   {
-    if (is_gone(gone, static_cast<std::int32_t>(i)))
-      continue;
-    near.clear();
-    for (const std::int32_t e : grid.near(&p.x[3 * i]))
-      if (distance_to_element(bars, e, &p.x[3 * i])[0] < p.r[i] + impl::bar_radius(bars, e) + 2.0 * skin)
-        near.push_back(e);
-    std::sort(near.begin(), near.end());
-    for (const std::int32_t e : near)
+    const std::size_t t = omp_get_thread_num(), nt = omp_get_num_threads();
+    std::vector<std::int32_t>& ps = spheres[t];
+    std::vector<std::int32_t>& pe = elements[t];
+    for (std::size_t i = p.size() * t / nt; i < p.size() * (t + 1) / nt; ++i)
     {
-      c.sphere.push_back(static_cast<std::int32_t>(i));
-      c.element.push_back(e);
+      if (is_gone(gone, static_cast<std::int32_t>(i)))
+        continue;
+      // the grid lists each cell's elements in increasing order
+      for (const std::int32_t e : grid.near(&p.x[3 * i]))
+      {
+        const double reach = p.r[i] + impl::bar_radius(bars, e) + 2.0 * skin;
+        if (impl::distance2_to_element(bars, e, &p.x[3 * i])[0] < reach * reach)
+        {
+          ps.push_back(static_cast<std::int32_t>(i));
+          pe.push_back(e);
+        }
+      }
     }
+  }
+  for (std::size_t t = 0; t < spheres.size(); ++t)
+  {
+    c.sphere.insert(c.sphere.end(), spheres[t].begin(), spheres[t].end());
+    c.element.insert(c.element.end(), elements[t].begin(), elements[t].end());
   }
 }
 

@@ -4,6 +4,7 @@
 #include "dembridge/dem/bars.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -17,13 +18,15 @@ namespace dembridge::dem::impl
 /// The bars' elements by cells of a uniform grid: each element listed in
 /// every cell its box, grown by `reach`, touches; a query looks in its own
 /// cell only, and finds every element within `reach` of it (a point
-/// outside the grid has none).
+/// outside the grid has none). The lists are compressed rows: cell id's
+/// elements are items[start[id]] to items[start[id + 1]] (one offset per
+/// cell, so that a query over many points stays in cache).
 struct ElementGrid
 {
   Point lo{};
   double cell = 1.0;
   int n[3] = {1, 1, 1};
-  std::vector<std::vector<std::int32_t>> lists;
+  std::vector<std::int32_t> start{0, 0}, items;
   std::int64_t index(const Point& x) const
   {
     std::int64_t id = 0;
@@ -39,9 +42,26 @@ struct ElementGrid
   std::span<const std::int32_t> near(const double* x) const
   {
     const std::int64_t id = index({x[0], x[1], x[2]});
-    return id < 0 ? std::span<const std::int32_t>{} : std::span<const std::int32_t>(lists[id]);
+    if (id < 0)
+      return {};
+    return std::span<const std::int32_t>(items.data() + start[id], items.data() + start[id + 1]);
   }
 };
+
+/// The squared distance from x to the axis of element e (clamped to the
+/// segment) and the place of the nearest point, xi in [0, 1]: the inline
+/// form of distance_to_element for the loops over many spheres.
+inline std::array<double, 2> distance2_to_element(const Bars& bars, std::size_t e, const double* x)
+{
+  const double* pa = &bars.x[3 * bars.a[e]];
+  const double* pb = &bars.x[3 * bars.b[e]];
+  const double d[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
+  const double r[3] = {x[0] - pa[0], x[1] - pa[1], x[2] - pa[2]};
+  const double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+  const double xi = std::clamp((r[0] * d[0] + r[1] * d[1] + r[2] * d[2]) / dd, 0.0, 1.0);
+  const double q[3] = {r[0] - xi * d[0], r[1] - xi * d[1], r[2] - xi * d[2]};
+  return {q[0] * q[0] + q[1] * q[1] + q[2] * q[2], xi};
+}
 
 /// The grid of the elements for queries within `reach` of them, cells of
 /// max(longest element, reach / 4) over the bars' box grown by reach.
@@ -66,8 +86,9 @@ inline ElementGrid element_grid(const Bars& bars, double reach)
     grid.lo[k] = lo[k] - reach;
     grid.n[k] = static_cast<int>(std::ceil((hi[k] - lo[k] + 2.0 * reach) / grid.cell)) + 1;
   }
-  grid.lists.resize(std::size_t(grid.n[0]) * grid.n[1] * grid.n[2]);
-  for (std::size_t e = 0; e < bars.elements(); ++e)
+  const std::size_t cells = std::size_t(grid.n[0]) * grid.n[1] * grid.n[2];
+  // two passes over the elements' cells: count, then fill
+  auto each_cell = [&](std::size_t e, auto&& f)
   {
     int c0[3], c1[3];
     for (int k = 0; k < 3; ++k)
@@ -79,8 +100,17 @@ inline ElementGrid element_grid(const Bars& bars, double reach)
     for (int i = c0[0]; i <= c1[0]; ++i)
       for (int j = c0[1]; j <= c1[1]; ++j)
         for (int k = c0[2]; k <= c1[2]; ++k)
-          grid.lists[(std::size_t(i) * grid.n[1] + j) * grid.n[2] + k].push_back(static_cast<std::int32_t>(e));
-  }
+          f((std::size_t(i) * grid.n[1] + j) * grid.n[2] + k);
+  };
+  grid.start.assign(cells + 1, 0);
+  for (std::size_t e = 0; e < bars.elements(); ++e)
+    each_cell(e, [&](std::size_t id) { ++grid.start[id + 1]; });
+  for (std::size_t id = 0; id < cells; ++id)
+    grid.start[id + 1] += grid.start[id];
+  grid.items.resize(grid.start[cells]);
+  std::vector<std::int32_t> fill(grid.start.begin(), grid.start.end() - 1);
+  for (std::size_t e = 0; e < bars.elements(); ++e)
+    each_cell(e, [&](std::size_t id) { grid.items[fill[id]++] = static_cast<std::int32_t>(e); });
   return grid;
 }
 

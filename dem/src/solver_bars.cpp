@@ -116,8 +116,8 @@ void DemSolver::save_bars(const checkpoint::Group& g) const
   g.write("contact_spheres", _bar_contacts.sphere);
   g.write("contact_elements", _bar_contacts.element);
   g.write("contact_x_refresh", _bar_contacts.x_refresh);
-  g.write("contact_version", std::vector<std::int64_t>{static_cast<std::int64_t>(_bar_contacts.version),
-                                                      _bar_contacts.refreshed ? 1 : 0});
+  g.write("contact_x_spheres", _bar_contacts.x_spheres);
+  g.write_int("contact_refreshed", _bar_contacts.refreshed ? 1 : 0);
 }
 
 void DemSolver::load_bars(const checkpoint::Group& g)
@@ -155,12 +155,14 @@ void DemSolver::load_bars(const checkpoint::Group& g)
   g.read("contact_x_refresh", c.x_refresh);
   if (!c.x_refresh.empty() && c.x_refresh.size() != b.x.size())
     g.fail("contact_x_refresh", "not 3 values per bar node (another set-up)");
-  std::vector<std::int64_t> version;
-  g.read("contact_version", version);
-  if (version.size() != 2)
-    g.fail("contact_version", "not {version, refreshed}");
-  c.version = static_cast<std::size_t>(version[0]);
-  c.refreshed = version[1] != 0;
+  g.read("contact_x_spheres", c.x_spheres);
+  if (!c.x_spheres.empty() && c.x_spheres.size() != _p.x.size())
+    g.fail("contact_x_spheres", "not 3 values per sphere (another set-up)");
+  std::vector<std::int64_t> refreshed;
+  g.read("contact_refreshed", refreshed);
+  if (refreshed.size() != 1)
+    g.fail("contact_refreshed", "not one value");
+  c.refreshed = refreshed[0] != 0;
 }
 
 } // namespace dembridge::dem

@@ -37,7 +37,7 @@ struct BeamConfig
   double radius_ratio = 2.0;
   unsigned seed = 1;
   double deflection = 0.0;    ///< midspan deflection to reach [m]; 0 = 2 x the theory's at first yield
-  double speed = 0.1;         ///< the loading plate's speed [m/s] (reached over ramp_time)
+  double speed = 0.04;        ///< the loading plate's speed [m/s] (reached over ramp_time)
   double ramp_time = 0.0;     ///< [s]; 0 = 4 periods of the first bending mode
   double damping = 0.0;       ///< [1/s]; 0 = 0.1 x the first bending mode's circular frequency
   double safety = 0.5;        ///< fraction of the critical time step

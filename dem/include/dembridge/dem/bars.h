@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -228,19 +229,23 @@ double bar_body_energy(const Bars& bars, const RigidBody& b);
 /// at a node between two elements is pushed once. A sphere with an intact
 /// bond is left to its bond's radial spring on that bar, and touches the
 /// others.
+struct BarGridCache; // the elements' grid (bar_contacts.cpp)
 struct BarContacts
 {
   std::vector<std::int32_t> sphere, element; ///< candidate pairs, by sphere then element
   std::vector<double> x_refresh;             ///< the bar nodes at the last refresh (3 per node)
-  std::size_t version = 0;                   ///< the neighbour list's version then
+  std::vector<double> x_spheres;             ///< the spheres then (3 per sphere)
   bool refreshed = false;
   std::vector<std::int32_t> bonded;          ///< scratch: 1 + the bar a sphere has an intact bond to, or 0
+  /// The elements' grid for the refresh, kept while no node has moved more
+  /// than its margin since it was built (derived: not in the checkpoint).
+  std::shared_ptr<const BarGridCache> grid;
 };
 /// Refreshes the candidate pairs, every sphere not `gone` whose centre
-/// lies within r + r_b + 2 skin of an element's axis, when the neighbour
-/// list was rebuilt or a bar node moved more than skin/2 since the last
-/// refresh: a sphere moves less than skin/2 from its place at the last
-/// build, so no other pair can touch before the next refresh.
+/// lies within r + r_b + 2 skin of an element's axis (skin: the neighbour
+/// list's), when the largest move of a sphere since the last refresh plus
+/// the largest move of a bar node reaches 2 skin: until then no other pair
+/// can touch.
 void refresh_bar_contacts(const Bars& bars, const Particles& p, BarContacts& c, const NeighbourList& nl,
                           std::span<const std::uint8_t> gone = {});
 /// Adds the contacts' forces to p.f and bars.f (after bar_forces, which
