@@ -501,6 +501,7 @@ void bond_force(Bars& bars, Particles& p, std::size_t k, bool advance, bool gone
     const double f0 = link_normal_force(g0, bars.gap_max[k], radial).fn;
     w.broken += S * (t0 * t0 / (2.0 * law.k0()) + 0.5 * t0 * (slip - bars.slip[k])) + 0.5 * f0 * gap;
     bars.open[k] = 1;
+    w.changed = true;
     bars.tau[k] = 0.0;
     return;
   }
@@ -611,6 +612,7 @@ BarWork bar_forces(Bars& bars, Particles& p, bool advance, std::span<const std::
     any_broke = element_force(bars, e, advance, w.broken) || any_broke;
   if (any_broke)
     release_bending(bars, w.broken);
+  w.changed = any_broke;
   for (std::size_t k = 0; k < bars.bend_k.size(); ++k)
     bend_force(bars, k);
   for (std::size_t k = 0; k < bars.bonds(); ++k)

@@ -467,10 +467,14 @@ void DemSolver::end_step()
   const double t3 = omp_get_wtime();
   if (_has_bars)
   {
+    _bar_open_old.assign(_bars.open.begin(), _bars.open.end());
+    _bar_broken_old.assign(_bars.broken.begin(), _bars.broken.end());
     const BarWork bw = bar_forces(_bars, _p, true, _removed);
     _e.bar_slip += bw.slip;
     _e.bar_broken += bw.broken;
     refresh_bar_contacts(_bars, _p, _bar_contacts, _nl, _removed);
+    if (bw.changed)
+      _e.bar_broken += bar_contact_jump();
     bar_contact_forces(_bars, _p, _bar_contacts, _mat, _removed);
     for (auto& b : _bodies)
       bar_body_forces(_bars, b);

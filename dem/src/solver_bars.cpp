@@ -95,6 +95,19 @@ double DemSolver::bar_reactions()
   return work;
 }
 
+double DemSolver::bar_contact_jump()
+{
+  // a bond that opens hands its sphere to the contact, perhaps already
+  // overlapping the bar; an element that breaks drops the contacts on it:
+  // the contacts' energy changes at fixed positions, booked as released
+  std::swap(_bars.open, _bar_open_old);
+  std::swap(_bars.broken, _bar_broken_old);
+  const double before = bar_contact_energy(_bars, _p, _bar_contacts, _mat, _removed);
+  std::swap(_bars.open, _bar_open_old);
+  std::swap(_bars.broken, _bar_broken_old);
+  return before - bar_contact_energy(_bars, _p, _bar_contacts, _mat, _removed);
+}
+
 void DemSolver::save_bars(const checkpoint::Group& g) const
 {
   const Bars& b = _bars;
@@ -144,6 +157,8 @@ void DemSolver::load_bars(const checkpoint::Group& g)
     for (int k = 0; k < 3; ++k)
       _bar_reac[q][k] = reac[3 * q + k];
   BarContacts& c = _bar_contacts;
+  if (!g.has("contact_spheres"))
+    return; // written before the contacts: they are found at the first step
   g.read("contact_spheres", c.sphere);
   g.read("contact_elements", c.element);
   if (c.sphere.size() != c.element.size())

@@ -296,8 +296,8 @@ private:
   /// tension zone (a beam whose bars cannot carry the cracking moment
   /// once cracked): the cracking load is the largest load before the
   /// load first falls 15 % below its running maximum (well above the
-  /// ~5 % ripples of the loading; only past 30 % of the theory's cracking
-  /// load, clear of the ramp). Without such a drop before first yield (a
+  /// ~5 % ripples of the loading; counted from the first load past 30 % of
+  /// the theory's cracking load, clear of the ramp). Without such a drop before first yield (a
   /// beam reinforced enough to carry it), the kink: the first point past
   /// 30 % of the theory's cracking load whose secant falls below 90 % of
   /// the initial stiffness k0.
@@ -306,7 +306,9 @@ private:
     double top = 0.0, d_top = 0.0;
     for (std::size_t k = 0; k < _load.size(); ++k)
     {
-      if (_load[k] < 0.3 * _t.p_cracking || (_d_yield_model > 0.0 && _delta[k] >= _d_yield_model))
+      if (_d_yield_model > 0.0 && _delta[k] >= _d_yield_model)
+        break;
+      if (top == 0.0 && _load[k] < 0.3 * _t.p_cracking)
         continue;
       if (_load[k] > top)
       {

@@ -196,6 +196,7 @@ struct BarWork
 {
   double slip = 0.0;   ///< bond slip beyond the envelope
   double broken = 0.0; ///< released by elements that broke and bonds that opened
+  bool changed = false; ///< an element broke or a bond opened (the contacts may change: BarContacts)
 };
 
 /// Axial forces of the elements and the bonds' forces, from the positions:

@@ -45,8 +45,11 @@ struct ParticleMotion
   /// about that axis through its centroid: component k becomes affine
   /// along e_k x axis only (the one direction a rotation about the axis
   /// moves it along), so a support line hinged about y lets a beam along x
-  /// turn in its plane of bending and holds its roll and its twist. Zero:
-  /// both rotations normal to each component are free.
+  /// turn in its plane of bending and holds its roll and its twist. Each
+  /// component's slope is fitted on its own, as for `rotates` alone, so
+  /// with two components chosen the set may also shear in the plane
+  /// normal to the axis. Zero: both rotations normal to each component are
+  /// free.
   std::array<double, 3> axis{0.0, 0.0, 0.0};
   /// A hinged set: it rotates and moves (a fixed set holds everything).
   bool hinged() const { return rotates && kind != MotionKind::fixed; }

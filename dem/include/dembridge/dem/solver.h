@@ -224,6 +224,8 @@ private:
   void contact_bodies(double dt);
   Bars _bars;
   BarContacts _bar_contacts; // spheres on the bars beyond their bonds
+  std::vector<std::uint8_t> _bar_open_old, _bar_broken_old; // the bonds' and elements' state before the step's forces
+  double bar_contact_jump(); // the contacts' energy lost when bonds open or elements break
   bool _has_bars = false;
   std::vector<std::int32_t> _bar_moved; // nodes with a prescribed velocity
   std::vector<std::int32_t> _bar_group; // the group of each (move_bar_nodes' call)
