@@ -1,6 +1,6 @@
 // The contacts of spheres with the bars beyond their bonds (bars.h,
-// BarContacts): candidate pairs refreshed with the neighbour list, a
-// frictionless penalty on the overlap with the nearest element of each bar.
+// BarContacts): candidate pairs refreshed when spheres and nodes may have
+// closed a gap of 2 skin, a frictionless penalty on the overlap with the nearest element of each bar.
 #include "dembridge/dem/bars.h"
 
 #include "bar_grid.h"
@@ -23,16 +23,29 @@ struct BarGridCache
 
 namespace
 {
+bool is_gone(std::span<const std::uint8_t> gone, std::int32_t i) { return !gone.empty() && gone[i]; }
+
+/// The largest distance between the points x and their places x0 (3 per
+/// point), those flagged in `gone` left out.
+double largest_move(std::span<const double> x0, std::span<const double> x, std::span<const std::uint8_t> gone)
+{
+  double m2 = 0.0;
+  for (std::size_t i = 0; i < x.size() / 3; ++i)
+  {
+    if (is_gone(gone, static_cast<std::int32_t>(i)))
+      continue;
+    const double d0 = x[3 * i] - x0[3 * i], d1 = x[3 * i + 1] - x0[3 * i + 1], d2 = x[3 * i + 2] - x0[3 * i + 2];
+    m2 = std::max(m2, d0 * d0 + d1 * d1 + d2 * d2);
+  }
+  return std::sqrt(m2);
+}
+
 /// The cached grid if it still serves queries within `reach`, else a new one.
 std::shared_ptr<const BarGridCache> bar_grid(const Bars& bars, std::shared_ptr<const BarGridCache> cache,
                                              double reach, double margin)
 {
-  bool fresh = cache && cache->reach >= reach && cache->x.size() == bars.x.size();
-  for (std::size_t n = 0; fresh && n < bars.nodes(); ++n)
-    fresh = std::hypot(bars.x[3 * n] - cache->x[3 * n], bars.x[3 * n + 1] - cache->x[3 * n + 1],
-                       bars.x[3 * n + 2] - cache->x[3 * n + 2])
-            <= cache->margin;
-  if (fresh)
+  if (cache && cache->reach >= reach && cache->x.size() == bars.x.size()
+      && largest_move(cache->x, bars.x, {}) <= cache->margin)
     return cache;
   auto g = std::make_shared<BarGridCache>();
   g->grid = impl::element_grid(bars, reach + margin);
@@ -41,8 +54,6 @@ std::shared_ptr<const BarGridCache> bar_grid(const Bars& bars, std::shared_ptr<c
   g->margin = margin;
   return g;
 }
-
-bool is_gone(std::span<const std::uint8_t> gone, std::int32_t i) { return !gone.empty() && gone[i]; }
 
 /// For each sphere, 1 + the bar (line) it has an intact bond to, or 0.
 void mark_bonded(const Bars& bars, std::vector<std::int32_t>& flags, std::size_t spheres)
@@ -114,20 +125,6 @@ void for_each_touch(const Bars& bars, const Particles& p, const BarContacts& c, 
       visit(best);
     }
   }
-}
-/// The largest distance between the points x and their places x0 (3 per
-/// point), those flagged in `gone` left out.
-double largest_move(std::span<const double> x0, std::span<const double> x, std::span<const std::uint8_t> gone)
-{
-  double m2 = 0.0;
-  for (std::size_t i = 0; i < x.size() / 3; ++i)
-  {
-    if (is_gone(gone, static_cast<std::int32_t>(i)))
-      continue;
-    const double d0 = x[3 * i] - x0[3 * i], d1 = x[3 * i + 1] - x0[3 * i + 1], d2 = x[3 * i + 2] - x0[3 * i + 2];
-    m2 = std::max(m2, d0 * d0 + d1 * d1 + d2 * d2);
-  }
-  return std::sqrt(m2);
 }
 } // namespace
 
