@@ -8,7 +8,12 @@
 - scripts/ballistic.py: the Lambert-Jonas fit recovers a, p and V_bl of
   residual velocities made from known values (a = 0.9, p = 2.12,
   V_bl = 333 m/s) to the fit's grid: p to 3 % (steps of 0.05), a to 2 %,
-  V_bl to 1 %.
+  V_bl to 1 %;
+- scripts/resistance.py: R and N of F = A (R + N rho v^2) fitted to two
+  projectile histories made from the closed-form solution of that force
+  law (R = 500 MPa, N = 0.106; 0.5 kg, 25.4 mm, 1000 and 700 m/s, sampled
+  every 0.1 mm) within 1 % (the central differences of the energy on that
+  grid err by about 1e-5).
 Usage: check_scripts.py SOURCE_DIR"""
 import math
 import os
@@ -16,7 +21,9 @@ import sys
 
 sys.path.insert(0, os.path.join(sys.argv[1], "scripts"))
 import ballistic  # noqa: E402
+import numpy as np  # noqa: E402
 import penetration  # noqa: E402
+import resistance  # noqa: E402
 
 problems = []
 for name, f in (("Forrestal", penetration.forrestal), ("Li-Chen", penetration.li_chen)):
@@ -36,6 +43,19 @@ print("fit of synthetic data:", fit)
 for key, want, tol in (("a", a, 0.02), ("p", p, 0.03), ("v_bl_m_s", vbl, 0.01)):
     if abs(fit[key] / want - 1) > tol:
         problems.append(f"Lambert-Jonas fit: {key} {fit[key]} instead of {want}")
+# m v dv/dx = -A (R + N rho v^2): v^2 = (V0^2 + R/(N rho)) exp(-2 A N rho x / m) - R/(N rho)
+mass, area, rho, r_true, n_true = 0.5, math.pi * 0.0254 ** 2 / 4, 2400.0, 500e6, 0.106
+x = np.arange(0.0, 0.15, 1e-4)
+data = []
+for v0 in (1000.0, 700.0):
+    c = r_true / (n_true * rho)
+    v = np.sqrt((v0 ** 2 + c) * np.exp(-2 * area * n_true * rho * x / mass) - c)
+    data.append(resistance.window(x, v, 0.5 * mass * v ** 2, 0.05, 0.12))
+r_fit, n_fit = resistance.fit(data, area, rho)
+print(f"resistance fit of synthetic histories: R {r_fit / 1e6:.2f} MPa, N {n_fit:.4f}")
+for key, got, want in (("R", r_fit, r_true), ("N", n_fit, n_true)):
+    if abs(got / want - 1) > 0.01:
+        problems.append(f"resistance fit: {key} {got} instead of {want}")
 for q in problems:
     print(q)
 sys.exit(1 if problems else 0)

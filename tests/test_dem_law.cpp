@@ -1,11 +1,13 @@
 // The concrete law of the DE model (docs/method.md sections 1.5-1.8), pair by pair,
 // against the closed-form values of the law itself.
 #include "dembridge/dem/law.h"
+#include "dembridge/dem/material_file.h"
 #include "dembridge/dem/packing.h"
 #include "dembridge/dem/solver.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <filesystem>
 #include <numbers>
 
 using namespace dembridge::dem;
@@ -101,6 +103,28 @@ TEST_CASE("contacts: push only, Coulomb friction cap", "[dem][law]")
   CHECK(t.slip_energy == 0.0);
   // no compression, no friction
   CHECK(norm(contact_shear_force({1, 0, 0}, {0, 0, 0}, 0.0, p).fs) == 0.0);
+}
+
+TEST_CASE("contacts: the Tresca limit caps friction at S_int tau_max under high pressure only", "[dem][law]")
+{
+  LinkLaw p = law();
+  p.shear_limit = 50e6; // S_int tau_max = 157 N
+  const double tresca = p.s_int * p.shear_limit;
+  // low pressure: Coulomb's cap, 100 N x tan 20 = 36 N, binds
+  const double low = 100.0 * p.tan_phi_c;
+  auto a = contact_shear_force({0, 0, 0}, {0, 2 * low / p.ks, 0}, -100.0, p);
+  CHECK_THAT(norm(a.fs), WithinRel(low, 1e-14));
+  // high pressure: 5 kN x tan 20 = 1.8 kN, far above the limit, which binds
+  auto b = contact_shear_force({0, 0, 0}, {0, 2 * tresca / p.ks, 0}, -5000.0, p);
+  CHECK(b.exceeded);
+  CHECK_THAT(norm(b.fs), WithinRel(tresca, 1e-14));
+  // sliding on at the limit dissipates limit x slip, as at Coulomb's cap
+  auto g = contact_shear_force(b.fs, {0, 0.3 * tresca / p.ks, 0}, -5000.0, p);
+  CHECK_THAT(g.slip_energy, WithinRel(0.3 * tresca * tresca / p.ks, 1e-12));
+  // 0 = no limit: Coulomb at any pressure
+  p.shear_limit = 0.0;
+  const double coulomb = 5000.0 * p.tan_phi_c;
+  CHECK_THAT(norm(contact_shear_force({0, 0, 0}, {0, 2 * coulomb / p.ks, 0}, -5000.0, p).fs), WithinRel(coulomb, 1e-14));
 }
 
 TEST_CASE("torques: magnitude R |F_s|, direction -n x F_s", "[dem][law]")
@@ -480,4 +504,61 @@ TEST_CASE("strain-rate effect: the factor stops growing at the rate cap", "[dem]
   }
   CHECK_THAT(l.strength[0], WithinRel(dif, 1e-12));
   CHECK_THAT(most, WithinRel(peak, 1e-3));
+}
+
+TEST_CASE("strain-rate effect: the factor raises C0 too, or T alone (rate_cohesion false)", "[dem][rate]")
+{
+  // A link at its initial distance (no normal force) whose stored shear
+  // force is 1.5 S C0, with a strength factor of 3 (as a fast pull leaves
+  // it). Its Mohr-Coulomb cap is S C0 times the factor, 3 S C0, when the
+  // factor raises C0: the link holds; S C0 when it raises T alone: the link
+  // breaks in shear. Closed form: the caps differ by the factor, 3.
+  for (const bool cohesion : {true, false})
+  {
+    Material m;
+    m.micro = {0.2, 1.0, 1.0};
+    m.rate_fc = 48e6;
+    m.rate_cohesion = cohesion;
+    Particles p = make_particles(std::vector<double>{0, 0, 0, 2e-3, 0, 0}, std::vector<double>{1e-3, 1e-3}, 2400.0, 1.0);
+    Links l = create_links(p, 1.01, m);
+    REQUIRE(l.size() == 1);
+    l.strength.assign(1, 3.0);
+    l.fs[1] = 1.5 * std::numbers::pi * 1e-6 * m.cohesion; // along y, normal to the link
+    NeighbourList nl(1e-4);
+    nl.update(p.x, p.r, l);
+    ForceCounters counters;
+    compute_forces(p, l, nl, m, 0.0, counters);
+    INFO("rate_cohesion " << cohesion);
+    CHECK((l.state[0] == LinkState::intact) == cohesion);
+    if (cohesion)
+      CHECK_THAT(p.f[4], WithinRel(l.fs[1], 1e-12)); // the stored force, on b
+  }
+}
+
+TEST_CASE("material file: the optional impact keys round trip, absent ones stay off", "[dem][law]")
+{
+  const auto dir = std::filesystem::temp_directory_path() / "dembridge_material_keys";
+  std::filesystem::create_directories(dir);
+  MaterialFile m;
+  m.material.rate_fc = 48e6;
+  m.material.rate_max = 100.0;
+  m.material.contact_shear_limit = 1.68e8;
+  m.material.rate_cohesion = false;
+  m.material.compaction = {0.003, 0.5, 0.033};
+  write_material(dir / "on.json", m);
+  const Material a = read_material(dir / "on.json").material;
+  CHECK(a.rate_fc == 48e6);
+  CHECK(a.rate_max == 100.0);
+  CHECK(a.contact_shear_limit == 1.68e8);
+  CHECK(!a.rate_cohesion);
+  CHECK(a.compaction.lock == 0.033);
+  write_material(dir / "off.json", MaterialFile{});
+  const Material b = read_material(dir / "off.json").material;
+  CHECK(b.rate_fc == 0.0);
+  CHECK(b.contact_shear_limit == 0.0);
+  CHECK(b.rate_cohesion);
+  CHECK(!b.compaction.on());
+  // the limit checked like every parameter
+  m.material.contact_shear_limit = -1.0;
+  CHECK_THROWS_WITH(m.material.validate(), Catch::Matchers::Contains("contacts' shear limit"));
 }

@@ -41,6 +41,8 @@ void Material::validate() const
     impl::out_of_range("contact friction angle phi_c", phi_c_deg, "in [0, 90) degrees");
   if (!(rate_fc >= 0.0) || !std::isfinite(rate_fc))
     impl::out_of_range("strain-rate law's compressive strength f_c", rate_fc, ">= 0 Pa (0 = no rate effect)");
+  if (!(contact_shear_limit >= 0.0) || !std::isfinite(contact_shear_limit))
+    impl::out_of_range("contacts' shear limit", contact_shear_limit, ">= 0 Pa (0 = none)");
   if (!(rate_max >= 0.0) || !std::isfinite(rate_max))
     impl::out_of_range("strain-rate cap", rate_max, ">= 0 1/s (0 = none)");
   const CompactionLaw& c = compaction;
@@ -64,7 +66,7 @@ LinkLaw Material::law(double ra, double rb, double d_init) const
   const double deg = std::numbers::pi / 180.0;
   // zeta = 0 would make the softening slope infinite: a brittle link
   return {k.kn, k.ks, s, tensile, cohesion, std::tan(phi_i_deg * deg), std::tan(phi_c_deg * deg),
-          std::max(zeta, 1e-12)};
+          std::max(zeta, 1e-12), contact_shear_limit};
 }
 
 double position_quantum(std::span<const double> x)

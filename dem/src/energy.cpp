@@ -32,7 +32,8 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
     if (l.strength.size() == l.size() && !l.strength.empty())
     {
       law.tensile *= l.strength[k];
-      law.cohesion *= l.strength[k];
+      if (mat.rate_cohesion)
+        law.cohesion *= l.strength[k];
     }
     double delta = std::sqrt(dot3(d, d)) - l.d0[k];
     if (compacting)

@@ -291,7 +291,8 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
         factor = std::max(factor, malvar_ross_dif(mat.rate_max > 0.0 ? std::min(rate, mat.rate_max) : rate, mat.rate_fc));
       }
       law.tensile *= factor;
-      law.cohesion *= factor;
+      if (mat.rate_cohesion)
+        law.cohesion *= factor;
     }
     const double delta_max_old = l.delta_max[k];
     const NormalForce nf = link_normal_force(delta, delta_max_old, law);
@@ -319,7 +320,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       // thread's demand grows
       const double f2 = dot3(trial.data(), trial.data());
       // (in units of the base C0: the link's cap is its factor times C0)
-      const double factor = factored ? l.strength[k] : 1.0;
+      const double factor = factored && mat.rate_cohesion ? l.strength[k] : 1.0;
       const double room = law.s_int * demand_before * factor - nf.fn * law.tan_phi_i;
       if (f2 > 0.0 && (room < 0.0 || f2 > room * room))
       {

@@ -103,6 +103,15 @@ MaterialFile read_material(const std::filesystem::path& file)
     t.rate_fc = get("rate_fc_pa");
   if (j.contains("rate_max_1_s"))
     t.rate_max = get("rate_max_1_s");
+  if (j.contains("rate_cohesion"))
+  {
+    if (!j["rate_cohesion"].is_boolean())
+      throw std::runtime_error("material file '" + file.string() + "': key 'rate_cohesion' must be true or false");
+    t.rate_cohesion = j["rate_cohesion"].get<bool>();
+  }
+  // optional: the contacts' Tresca limit (absent: none)
+  if (j.contains("contact_shear_limit_pa"))
+    t.contact_shear_limit = get("contact_shear_limit_pa");
   // optional: compaction (absent: none)
   if (j.contains("compaction_onset"))
     t.compaction = {get("compaction_onset"), get("compaction_stiffness"), get("compaction_lock")};
@@ -143,6 +152,10 @@ void write_material(const std::filesystem::path& file, const MaterialFile& m)
     j["rate_fc_pa"] = t.rate_fc;
   if (t.rate_max > 0.0)
     j["rate_max_1_s"] = t.rate_max;
+  if (!t.rate_cohesion)
+    j["rate_cohesion"] = false;
+  if (t.contact_shear_limit > 0.0)
+    j["contact_shear_limit_pa"] = t.contact_shear_limit;
   if (t.compaction.on())
   {
     j["compaction_onset"] = t.compaction.onset;

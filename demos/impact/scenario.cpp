@@ -108,6 +108,20 @@ public:
     return v;
   }
 
+  bool boolean(const std::string& key, bool def, const std::string& meaning)
+  {
+    const toml::node* n = get(key, meaning, def ? "true" : "false", "true | false");
+    bool v = def;
+    if (n)
+    {
+      if (!n->is_boolean())
+        fail(key, "must be true or false, not " + type_name(*n) + " (" + show(*n) + ")");
+      v = n->value<bool>().value();
+    }
+    record(key, v);
+    return v;
+  }
+
   std::string text(const std::string& key, const std::string& def, const std::string& choices,
                    const std::string& meaning)
   {
@@ -336,8 +350,13 @@ MaterialSpec read_material_section(Reader& r, const std::filesystem::path& scena
   c.zeta = r.number("softening", c.zeta, Allowed::non_negative(1e6), "softening factor zeta [-]");
   c.phi_i_deg = r.number("phi_i_deg", c.phi_i_deg, angle, "internal friction angle [degree]");
   c.phi_c_deg = r.number("phi_c_deg", c.phi_c_deg, angle, "contact friction angle [degree]");
+  c.contact_shear_limit = r.number("contact_shear_limit_pa", c.contact_shear_limit,
+                                   Allowed::positive(1e12).or_value(0.0, "no limit"),
+                                   "Tresca limit of the contacts' friction: their largest shear stress [Pa]");
   c.rate_fc = r.number("rate_fc_pa", c.rate_fc, Allowed::positive(1e10).or_value(0.0, "no rate effect"),
                        "strain-rate effect: the Malvar-Ross law's compressive strength f_c [Pa]");
+  c.rate_cohesion = r.boolean("rate_cohesion", c.rate_cohesion,
+                              "strain-rate effect: the factor multiplies C0 as well as T (false: T alone)");
   c.rate_max = r.number("rate_max_1_s", c.rate_max, Allowed::positive(1e9).or_value(0.0, "no cap"),
                         "strain-rate effect: the rate above which the factor stops growing [1/s]");
   c.compaction.onset = r.number("compaction_onset", c.compaction.onset, Allowed::open(0.0, 1.0).or_value(0.0, "no compaction"),

@@ -27,6 +27,10 @@ struct Material
   double zeta = 10.0;            ///< softening factor [-]
   double phi_i_deg = 30.0;       ///< internal friction angle [degree]
   double phi_c_deg = 30.0;       ///< contact friction angle [degree]
+  /// Tresca limit of the contacts' friction (docs/method.md section 1.6d):
+  /// the largest shear stress a contact carries, over its S_int [Pa]; 0 =
+  /// none (Coulomb friction at any pressure).
+  double contact_shear_limit = 0.0;
   /// Strain-rate effect on the links' strength (docs/method.md section
   /// 1.6b): 0 = none; else the concrete's compressive strength f_c [Pa] of
   /// the Malvar-Ross law, whose factor of the link's own tensile strain rate
@@ -37,6 +41,9 @@ struct Material
   /// links near a projectile see 1e3-1e4 /s, where the law's cube root
   /// would give factors above 15.
   double rate_max = 0.0;
+  /// Whether the rate factor multiplies C0 as well as T (true), or T alone
+  /// (false: the shear strength stays the quasi-static one).
+  bool rate_cohesion = true;
   /// Compaction of the links in compression (docs/method.md section 1.6c):
   /// off while compaction.onset is 0.
   CompactionLaw compaction;

@@ -27,6 +27,9 @@ struct LinkLaw
   double tan_phi_i;   ///< tan of the internal friction angle [-]
   double tan_phi_c;   ///< tan of the contact friction angle [-]
   double zeta;        ///< softening factor [-] (rupture at (1 + zeta) x elastic limit)
+  /// Tresca limit of the contacts' friction: |fs| <= S_int shear_limit
+  /// beside F_c tan(phi_c) [Pa]; 0 = none (Material::contact_shear_limit)
+  double shear_limit = 0.0;
 };
 
 /// State of a link after the normal law.
@@ -449,7 +452,9 @@ inline ShearForce contact_shear_force(const Vec3& fs, const Vec3& du_s, double f
 inline ShearForce contact_shear_cap(const Vec3& fs_trial, double fn, const LinkLaw& p, const Vec3& fs_prev)
 {
   ShearForce out{fs_trial, false, 0.0};
-  const double cap = std::max(-fn, 0.0) * p.tan_phi_c;
+  double cap = std::max(-fn, 0.0) * p.tan_phi_c;
+  if (p.shear_limit > 0.0)
+    cap = std::min(cap, p.s_int * p.shear_limit);
   const double mag2 = detail::dot(out.fs, out.fs);
   if (mag2 > cap * cap)
   {

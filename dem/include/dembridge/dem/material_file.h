@@ -15,6 +15,7 @@
 ///       "phi_i_deg": 30, "phi_c_deg": 30,
 ///       "links_per_sphere": 12,           how lambda is chosen on a packing
 ///       "rate_fc_pa": 4.8e7,              optional: the strain-rate effect (docs/method.md 1.6b)
+///       "contact_shear_limit_pa": 1.7e8,  optional: the contacts' Tresca limit (1.6d)
 ///       "compaction_onset": 0.004,        optional, with the next two: compaction (1.6c)
 ///       "compaction_stiffness": 0.3,
 ///       "compaction_lock": 0.04,
