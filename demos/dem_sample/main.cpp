@@ -92,6 +92,9 @@ int main(int argc, char** argv)
                    "notch at mid-height: the ligament's share of the cross-section; 1 = no notch "
                    "(stresses and fracture energy are then per ligament area)", Allowed::above(0.0, 1.0));
   demo::add_number(app, "--strain-rate", c.strain_rate, "platen strain rate [1/s]", Allowed::positive(1e6));
+  app.add_flag("--uniform-start", c.uniform_start,
+               "dynamic tests: every sphere starts at the affine velocity strain-rate x z, the platens at full "
+               "speed (no ramp, no wave from the platens); damping then defaults to 0");
   demo::add_number(app, "--max-strain", c.max_strain, "stop at this strain [-]",
                    Allowed::positive(1.0).or_value(0.0, "5e-4 tension, 5e-3 compression"));
   demo::add_number(app, "--stop-ratio", c.stop_ratio, "stop when the stress falls below this x peak [-]",

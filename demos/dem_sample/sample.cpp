@@ -198,12 +198,14 @@ private:
     _dt = cfg.dt > 0.0 ? cfg.dt : cfg.safety * _dt_crit;
     _c_wave = std::sqrt(cfg.material.youngs_modulus / cfg.material.density);
     const double omega1 = std::numbers::pi / (2.0 * H) * _c_wave;
-    _damping = cfg.damping >= 0.0 ? cfg.damping : omega1;
+    // (damping of the absolute velocity would resist the affine motion of a
+    // uniform start: none unless asked for)
+    _damping = cfg.damping >= 0.0 ? cfg.damping : (cfg.uniform_start ? 0.0 : omega1);
     const double sign = cfg.test == "tension" ? 1.0 : -1.0;
     _max_strain = cfg.max_strain > 0.0 ? cfg.max_strain
                                        : (cfg.test == "tension" && !cfg.to_separation ? 5e-4 : 5e-3);
     _v_top = sign * cfg.strain_rate * H;
-    _t_ramp = 20.0 * H / _c_wave;
+    _t_ramp = cfg.uniform_start ? 0.0 : 20.0 * H / _c_wave;
   }
 
   /// The solver, and the platens: the spheres touching the bottom face held
@@ -234,7 +236,18 @@ private:
     _solver->add_motion({"bottom", _bottom, MotionKind::velocity, {false, false, true},
                          [](double) { return 0.0; }});
     _solver->add_motion({"top", _top, MotionKind::velocity, {false, false, true},
-                         [=](double t) { return v_top * std::min(1.0, t / t_ramp); }});
+                         [=](double t) { return t_ramp > 0.0 ? v_top * std::min(1.0, t / t_ramp) : v_top; }});
+    if (_cfg.uniform_start)
+    {
+      // the bulk at the affine velocity (bottom face z = 0 held), the
+      // platens' spheres at their own: no jump at the first step
+      for (std::size_t i = 0; i < _p.size(); ++i)
+        _p.v[3 * i + 2] = v_top * _p.x[3 * i + 2] / H;
+      for (auto i : _bottom)
+        _p.v[3 * i + 2] = 0.0;
+      for (auto i : _top)
+        _p.v[3 * i + 2] = v_top;
+    }
   }
 
   void set_up_gauges()

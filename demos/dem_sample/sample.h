@@ -48,7 +48,11 @@ struct SampleConfig
   /// the first axial mode), for the fracture energy; stop_ratio is then not
   /// used and max_strain = 0 means 5e-3.
   bool to_separation = false;
-  double damping = -1.0;            ///< [1/s]; < 0 = first axial circular frequency of the sample
+  double damping = -1.0;            ///< [1/s]; < 0 = first axial circular frequency of the sample (0 with uniform_start)
+  /// Dynamic tests: every sphere starts at the affine axial velocity
+  /// strain_rate z (the platens' own from the first step, no ramp), so the
+  /// strain is uniform from the start and no wave runs from the platens.
+  bool uniform_start = false;
   double dt = 0.0;                  ///< [s]; 0 = safety x critical
   double safety = 0.9;
   std::string output_dir;           ///< "" = no files
