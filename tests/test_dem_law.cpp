@@ -535,6 +535,90 @@ TEST_CASE("strain-rate effect: the factor raises C0 too, or T alone (rate_cohesi
   }
 }
 
+TEST_CASE("strain-rate effect: the factor follows the link's rate through the low-pass filter", "[dem][rate]")
+{
+  // A link pulled at a constant 100 /s from the first step (sphere b at 0.2
+  // m/s, a held), the filter's weight a = dt / tau = 0.05: after n steps
+  // the filtered rate is 100 (1 - (1 - a)^n) /s and the factor DIF of it
+  // (it only grows), to round-off. The link stays elastic (its elongation
+  // after 60 steps is half its elastic limit).
+  Material m;
+  m.micro = {0.2, 1.0, 1.0};
+  m.rate_fc = 48e6;
+  const double dt = 1e-8, a = 0.05;
+  m.rate_filter = dt / a;
+  Particles p = make_particles(std::vector<double>{0, 0, 0, 2e-3, 0, 0}, std::vector<double>{1e-3, 1e-3}, 2400.0, 1.0);
+  Links l = create_links(p, 1.01, m);
+  const double V = 100.0 * l.d0[0];
+  DemSolver s(p, l, m, dt, 0.0, 1e-4);
+  s.add_motion({"a", {0}, MotionKind::fixed, {true, true, true}, {}});
+  s.add_motion({"b", {1}, MotionKind::velocity, {true, false, false}, [=](double) { return V; }});
+  s.start();
+  REQUIRE(l.rate.size() == 1);
+  for (int n = 1; n <= 60; ++n)
+  {
+    s.step();
+    const double rf = 100.0 * (1.0 - std::pow(1.0 - a, n));
+    INFO("step " << n);
+    REQUIRE_THAT(l.rate[0], WithinRel(rf, 1e-9));
+    REQUIRE_THAT(l.strength[0], WithinRel(malvar_ross_dif(rf, 48e6), 1e-9));
+  }
+  CHECK(l.state[0] == LinkState::intact);
+  CHECK(l.delta_max[0] * l.kn[0] < 0.6 * std::numbers::pi * 1e-6 * m.tensile);
+  // without the filter the factor is DIF(100 /s) from the first step
+  m.rate_filter = 0.0;
+  Particles q = make_particles(std::vector<double>{0, 0, 0, 2e-3, 0, 0}, std::vector<double>{1e-3, 1e-3}, 2400.0, 1.0);
+  Links k = create_links(q, 1.01, m);
+  DemSolver u(q, k, m, dt, 0.0, 1e-4);
+  u.add_motion({"a", {0}, MotionKind::fixed, {true, true, true}, {}});
+  u.add_motion({"b", {1}, MotionKind::velocity, {true, false, false}, [=](double) { return V; }});
+  u.start();
+  u.step();
+  CHECK(k.rate.empty());
+  CHECK_THAT(k.strength[0], WithinRel(malvar_ross_dif(100.0, 48e6), 1e-9));
+}
+
+TEST_CASE("strain-rate effect: with rate_mean_tension the factor grows only where the spheres are stretched",
+          "[dem][rate]")
+{
+  // Four spheres in a row, C - A - B - D, linked to their neighbours. B
+  // moves away from A at 100 /s of the link's length and A-B is stretched
+  // by 1e-8 m. With C and D pushed 0.1 mm in (their links compressed far
+  // more than A-B is stretched) A's and B's sums of K_n (D - D_init) D are
+  // negative: the gated factor stays 1, the ungated one is DIF(100 /s).
+  // With C and D in place the sums are positive and the gated factor is
+  // DIF(100 /s) too.
+  for (const bool pushed : {true, false})
+    for (const bool gate : {true, false})
+    {
+      Material m;
+      m.micro = {0.2, 1.0, 1.0};
+      m.rate_fc = 48e6;
+      m.rate_mean_tension = gate;
+      Particles p = make_particles(std::vector<double>{-2e-3, 0, 0, 0, 0, 0, 2e-3, 0, 0, 4e-3, 0, 0},
+                                   std::vector<double>{1e-3, 1e-3, 1e-3, 1e-3}, 2400.0, 1.0);
+      Links l = create_links(p, 1.01, m);
+      REQUIRE(l.size() == 3);
+      l.strength.assign(3, 1.0);
+      const double shift = pushed ? 1e-4 : 0.0;
+      p.x[0] += shift;     // C
+      p.x[6] += 1e-8;      // B
+      p.x[9] -= shift;     // D
+      p.v[6] = 0.2;        // B: 100 /s over D_init = 2 mm
+      NeighbourList nl(1e-4);
+      nl.update(p.x, p.r, l);
+      ForceCounters counters;
+      compute_forces(p, l, nl, m, 1e-9, counters);
+      // the A-B link: the one between spheres 1 and 2
+      std::size_t ab = 0;
+      while (!(l.a[ab] == 1 && l.b[ab] == 2))
+        ++ab;
+      INFO("pushed " << pushed << ", gate " << gate);
+      const double expected = gate && pushed ? 1.0 : malvar_ross_dif(100.0, 48e6);
+      CHECK_THAT(l.strength[ab], WithinRel(expected, 1e-9));
+    }
+}
+
 TEST_CASE("material file: the optional impact keys round trip, absent ones stay off", "[dem][law]")
 {
   const auto dir = std::filesystem::temp_directory_path() / "dembridge_material_keys";
@@ -544,6 +628,8 @@ TEST_CASE("material file: the optional impact keys round trip, absent ones stay 
   m.material.rate_max = 100.0;
   m.material.contact_shear_limit = 1.68e8;
   m.material.rate_cohesion = false;
+  m.material.rate_filter = 2e-6;
+  m.material.rate_mean_tension = true;
   m.material.compaction = {0.003, 0.5, 0.033};
   write_material(dir / "on.json", m);
   const Material a = read_material(dir / "on.json").material;
@@ -551,12 +637,16 @@ TEST_CASE("material file: the optional impact keys round trip, absent ones stay 
   CHECK(a.rate_max == 100.0);
   CHECK(a.contact_shear_limit == 1.68e8);
   CHECK(!a.rate_cohesion);
+  CHECK(a.rate_filter == 2e-6);
+  CHECK(a.rate_mean_tension);
   CHECK(a.compaction.lock == 0.033);
   write_material(dir / "off.json", MaterialFile{});
   const Material b = read_material(dir / "off.json").material;
   CHECK(b.rate_fc == 0.0);
   CHECK(b.contact_shear_limit == 0.0);
   CHECK(b.rate_cohesion);
+  CHECK(b.rate_filter == 0.0);
+  CHECK(!b.rate_mean_tension);
   CHECK(!b.compaction.on());
   // the limit checked like every parameter
   m.material.contact_shear_limit = -1.0;

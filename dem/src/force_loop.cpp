@@ -174,6 +174,35 @@ inline void pair_output(double* out, const double* n, double fn, const Vec3& fs,
     out[3 + q] = s * nxf[q];
   }
 }
+/// Per sphere, the sum of K_n (D - D_init) D over its intact links: > 0
+/// where its links are on the whole stretched (Material::rate_mean_tension).
+/// Each link's term on the team (w), then the sums in link order by one
+/// thread, so that they do not depend on the thread count.
+void sphere_stretch(const Particles& p, const Links& l, int nt, std::vector<double>& w, std::vector<double>& out)
+{
+  const auto nl = static_cast<std::int64_t>(l.size());
+  w.resize(l.size());
+#pragma omp parallel for num_threads(nt) schedule(static)
+  for (std::int64_t k = 0; k < nl; ++k)
+  {
+    if (l.state[k] != LinkState::intact)
+    {
+      w[k] = 0.0;
+      continue;
+    }
+    const double* xa = &p.x[3 * l.a[k]];
+    const double* xb = &p.x[3 * l.b[k]];
+    const double d[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+    const double D = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    w[k] = l.kn[k] * (D - l.d0[k]) * D;
+  }
+  out.assign(p.size(), 0.0);
+  for (std::size_t k = 0; k < l.size(); ++k)
+  {
+    out[l.a[k]] += w[k];
+    out[l.b[k]] += w[k];
+  }
+}
 } // namespace
 
 void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
@@ -216,6 +245,12 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   // the strain rate only over a step (dt > 0: the velocities are v(n+1/2))
   const bool factored = l.strength.size() == l.size() && !l.strength.empty();
   const bool rated = factored && mat.rate_fc > 0.0 && dt > 0.0;
+  // the filter's weight per step (Material::rate_filter)
+  const bool filtered = rated && l.rate.size() == l.size();
+  const double filter_weight = filtered ? std::min(1.0, dt / mat.rate_filter) : 1.0;
+  const bool gated = rated && mat.rate_mean_tension;
+  if (gated)
+    sphere_stretch(p, l, nt, s.link_stretch, s.stretch);
   const bool compacting = mat.compaction.on() && l.compaction.size() == l.size();
   // (the set, <= 0, is 0 for a link that never passed the onset)
   auto compacted_touch = [&](std::int32_t k, double rs)
@@ -283,11 +318,18 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       // follows the largest Malvar-Ross factor of its tensile strain rate
       // (v(n+1/2) of its spheres along the normal, over D_init)
       double& factor = l.strength[k];
-      if (rated && l.delta_max[k] * law.kn <= law.s_int * law.tensile * factor)
+      if (rated && l.delta_max[k] * law.kn <= law.s_int * law.tensile * factor
+          && (!gated || s.stretch[i] + s.stretch[l.b[k]] > 0.0))
       {
         const double* va = &p.v[3 * i];
         const double* vb = &p.v[3 * l.b[k]];
-        const double rate = ((vb[0] - va[0]) * n[0] + (vb[1] - va[1]) * n[1] + (vb[2] - va[2]) * n[2]) / l.d0[k];
+        double rate = ((vb[0] - va[0]) * n[0] + (vb[1] - va[1]) * n[1] + (vb[2] - va[2]) * n[2]) / l.d0[k];
+        if (filtered)
+        {
+          double& rf = l.rate[k];
+          rf += filter_weight * (rate - rf);
+          rate = rf;
+        }
         factor = std::max(factor, malvar_ross_dif(mat.rate_max > 0.0 ? std::min(rate, mat.rate_max) : rate, mat.rate_fc));
       }
       law.tensile *= factor;

@@ -56,6 +56,10 @@ struct ForceScratch
   std::vector<std::pair<std::int32_t, double>> broken_all;
   std::vector<std::int32_t> broken_ids;
   std::vector<double> demand;    ///< per thread: ForceCounters::cohesion_demand
+  /// per sphere: sum of K_n (D - D_init) D over its intact links
+  /// (Material::rate_mean_tension)
+  std::vector<double> stretch;
+  std::vector<double> link_stretch; ///< per link: its term of `stretch`
   const std::int32_t* links_for = nullptr; ///< the link array the index was built for
   std::size_t links_size = 0, pairs_version = SIZE_MAX;
   std::size_t bytes() const;

@@ -109,6 +109,14 @@ MaterialFile read_material(const std::filesystem::path& file)
       throw std::runtime_error("material file '" + file.string() + "': key 'rate_cohesion' must be true or false");
     t.rate_cohesion = j["rate_cohesion"].get<bool>();
   }
+  if (j.contains("rate_mean_tension"))
+  {
+    if (!j["rate_mean_tension"].is_boolean())
+      throw std::runtime_error("material file '" + file.string() + "': key 'rate_mean_tension' must be true or false");
+    t.rate_mean_tension = j["rate_mean_tension"].get<bool>();
+  }
+  if (j.contains("rate_filter_s"))
+    t.rate_filter = get("rate_filter_s");
   // optional: the contacts' Tresca limit (absent: none)
   if (j.contains("contact_shear_limit_pa"))
     t.contact_shear_limit = get("contact_shear_limit_pa");
@@ -152,6 +160,10 @@ void write_material(const std::filesystem::path& file, const MaterialFile& m)
     j["rate_fc_pa"] = t.rate_fc;
   if (t.rate_max > 0.0)
     j["rate_max_1_s"] = t.rate_max;
+  if (t.rate_filter > 0.0)
+    j["rate_filter_s"] = t.rate_filter;
+  if (t.rate_mean_tension)
+    j["rate_mean_tension"] = true;
   if (!t.rate_cohesion)
     j["rate_cohesion"] = false;
   if (t.contact_shear_limit > 0.0)

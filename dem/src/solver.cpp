@@ -35,6 +35,10 @@ DemSolver::DemSolver(Particles& p, Links& l, const Material& mat, double dt, dou
     l.strength.assign(l.size(), 1.0);
   else if (!(mat.rate_fc > 0.0))
     l.strength.clear();
+  if (mat.rate_fc > 0.0 && mat.rate_filter > 0.0 && l.rate.size() != l.size())
+    l.rate.assign(l.size(), 0.0);
+  else if (!(mat.rate_fc > 0.0 && mat.rate_filter > 0.0))
+    l.rate.clear();
   if (mat.compaction.on() && l.compaction.size() != l.size())
     l.compaction.assign(l.size(), 0.0);
   else if (!mat.compaction.on())

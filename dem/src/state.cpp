@@ -59,6 +59,7 @@ void save_links(const Group& g, const Links& l)
   g.write("weight", l.weight);
   g.write("strength", l.strength);
   g.write("compaction", l.compaction);
+  g.write("rate", l.rate);
 }
 
 void load_links(const Group& g, Links& l)
@@ -70,6 +71,8 @@ void load_links(const Group& g, Links& l)
                          {"delta_max", &l.delta_max}, {"weight", &l.weight}, {"strength", &l.strength},
                          {"compaction", &l.compaction}})
     read_same_size(g, name, *v);
+  if (g.has("rate")) // (absent from checkpoints without the rate filter)
+    read_same_size(g, "rate", l.rate);
   std::vector<std::uint8_t> state;
   g.read("state", state);
   if (state.size() != l.size())

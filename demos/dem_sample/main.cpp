@@ -88,6 +88,11 @@ int main(int argc, char** argv)
   demo::add_number(app, "--rate-fc", m.rate_fc,
                    "strain-rate effect on the links' T and C0: the Malvar-Ross law's compressive strength f_c [Pa]",
                    Allowed::positive(1e10).or_value(0.0, "no rate effect"));
+  app.add_flag("--rate-mean-tension", m.rate_mean_tension,
+               "strain-rate effect: a link's factor grows only while its spheres' links are, on the whole, stretched");
+  demo::add_number(app, "--rate-filter", m.rate_filter,
+                   "strain-rate effect: time constant of the low-pass filter on each link's rate [s]",
+                   Allowed::positive(1.0).or_value(0.0, "no filter"));
   demo::add_number(app, "--ligament", c.ligament,
                    "notch at mid-height: the ligament's share of the cross-section; 1 = no notch "
                    "(stresses and fracture energy are then per ligament area)", Allowed::above(0.0, 1.0));

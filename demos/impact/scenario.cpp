@@ -357,6 +357,11 @@ MaterialSpec read_material_section(Reader& r, const std::filesystem::path& scena
                        "strain-rate effect: the Malvar-Ross law's compressive strength f_c [Pa]");
   c.rate_cohesion = r.boolean("rate_cohesion", c.rate_cohesion,
                               "strain-rate effect: the factor multiplies C0 as well as T (false: T alone)");
+  c.rate_mean_tension = r.boolean("rate_mean_tension", c.rate_mean_tension,
+                                  "strain-rate effect: a link's factor grows only while its spheres' links are, "
+                                  "on the whole, stretched");
+  c.rate_filter = r.number("rate_filter_s", c.rate_filter, Allowed::positive(1.0).or_value(0.0, "no filter"),
+                           "strain-rate effect: time constant of the low-pass filter on each link's rate [s]");
   c.rate_max = r.number("rate_max_1_s", c.rate_max, Allowed::positive(1e9).or_value(0.0, "no cap"),
                         "strain-rate effect: the rate above which the factor stops growing [1/s]");
   c.compaction.onset = r.number("compaction_onset", c.compaction.onset, Allowed::open(0.0, 1.0).or_value(0.0, "no compaction"),

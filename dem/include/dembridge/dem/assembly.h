@@ -44,6 +44,16 @@ struct Material
   /// Whether the rate factor multiplies C0 as well as T (true), or T alone
   /// (false: the shear strength stays the quasi-static one).
   bool rate_cohesion = true;
+  /// Time constant of the low-pass filter on each link's strain rate before
+  /// the factor is taken from it [s]: r_f += min(1, dt / tau) (r - r_f); 0 =
+  /// no filter (the factor follows the rate of every step).
+  double rate_filter = 0.0;
+  /// Whether a link's factor grows only while its spheres are, on the whole,
+  /// stretched: the sum of K_n (D - D_init) D over both spheres' intact
+  /// links, at the step's positions, is positive (docs/method.md 1.6b). So
+  /// the tensile rate law acts where the material is pulled, not where it
+  /// fails under compression.
+  bool rate_mean_tension = false;
   /// Compaction of the links in compression (docs/method.md section 1.6c):
   /// off while compaction.onset is 0.
   CompactionLaw compaction;
@@ -121,6 +131,9 @@ struct Links
   /// factor of the link's strain rate while elastic, then fixed. Empty: 1
   /// everywhere (DemSolver sizes it when the material has a rate effect).
   std::vector<double> strength;
+  /// Filtered tensile strain rate of each link [1/s] (Material::rate_filter
+  /// > 0; empty otherwise): the rate its strength factor is taken from.
+  std::vector<double> rate;
   /// Largest compressive strain -delta / D_init each link reached (the
   /// compaction's history, Material::compaction). Empty: no compaction
   /// (DemSolver sizes it when the material compacts).
