@@ -27,7 +27,7 @@ struct Material
   double zeta = 10.0;            ///< softening factor [-]
   double phi_i_deg = 30.0;       ///< internal friction angle [degree]
   double phi_c_deg = 30.0;       ///< contact friction angle [degree]
-  /// Tresca limit of the contacts' friction (docs/method.md section 1.6d):
+  /// Tresca limit of the contacts' friction (docs/method.md section 1.7):
   /// the largest shear stress a contact carries, over its S_int [Pa]; 0 =
   /// none (Coulomb friction at any pressure).
   double contact_shear_limit = 0.0;
@@ -127,7 +127,7 @@ struct Links
   /// it multiplies the link's forces and energies. Empty: 1 everywhere.
   std::vector<double> weight;
   /// Strength factor of each link (the rate effect, Material::rate_fc): its
-  /// T and C0 are multiplied by it; >= 1, the largest dynamic increase
+  /// T (and C0, Material::rate_cohesion) are multiplied by it; >= 1, the largest dynamic increase
   /// factor of the link's strain rate while elastic, then fixed. Empty: 1
   /// everywhere (DemSolver sizes it when the material has a rate effect).
   std::vector<double> strength;
