@@ -82,6 +82,12 @@ MaterialFile read_material(const std::filesystem::path& file)
                                + key + "'");
     return j[key].get<double>();
   };
+  auto get_bool = [&](const char* key) -> bool
+  {
+    if (!j[key].is_boolean())
+      throw std::runtime_error("material file '" + file.string() + "': key '" + key + "' must be true or false");
+    return j[key].get<bool>();
+  };
   const std::string format = j.value("format", std::string());
   if (format != "dembridge-material-1" && format != "dembridge-material-2")
     throw std::runtime_error("material file '" + file.string() + "': \"format\": \"" + format
@@ -104,17 +110,9 @@ MaterialFile read_material(const std::filesystem::path& file)
   if (j.contains("rate_max_1_s"))
     t.rate_max = get("rate_max_1_s");
   if (j.contains("rate_cohesion"))
-  {
-    if (!j["rate_cohesion"].is_boolean())
-      throw std::runtime_error("material file '" + file.string() + "': key 'rate_cohesion' must be true or false");
-    t.rate_cohesion = j["rate_cohesion"].get<bool>();
-  }
+    t.rate_cohesion = get_bool("rate_cohesion");
   if (j.contains("rate_mean_tension"))
-  {
-    if (!j["rate_mean_tension"].is_boolean())
-      throw std::runtime_error("material file '" + file.string() + "': key 'rate_mean_tension' must be true or false");
-    t.rate_mean_tension = j["rate_mean_tension"].get<bool>();
-  }
+    t.rate_mean_tension = get_bool("rate_mean_tension");
   if (j.contains("rate_filter_s"))
     t.rate_filter = get("rate_filter_s");
   // optional: the contacts' Tresca limit (absent: none)

@@ -341,23 +341,27 @@ private:
                                           + _c.span / (4.0 * 5.0 / 6.0 * G * _c.width * _c.height));
     // a quantity the run did not reach (no crack, no yield: the beam failed
     // otherwise, e.g. in shear, or the deflection stopped short) is null
-    auto value = [](double a) { return a > 0.0 ? nlohmann::json(a) : nlohmann::json(nullptr); };
-    auto rel = [](double a, double b) { return a > 0.0 && b != 0.0 ? nlohmann::json(a / b - 1.0) : nlohmann::json(nullptr); };
+    auto value = [](double a, bool reached) { return reached ? nlohmann::json(a) : nlohmann::json(nullptr); };
+    auto rel = [](double a, double b, bool reached)
+    { return reached && b != 0.0 ? nlohmann::json(a / b - 1.0) : nlohmann::json(nullptr); };
+    // the cracked stiffness needs both points (it may come out <= 0: a
+    // first yield below the cracking peak, after the crack's load drop)
+    const bool cracked = p_cr > 0.0, yielded = _p_yield_model > 0.0, both = cracked && yielded && _d_yield_model > d_cr;
     _out["initial_stiffness_n_m"] = k0;
     _out["initial_stiffness_theory_n_m"] = k0_theory;
-    _out["cracking_load_n"] = value(p_cr);
+    _out["cracking_load_n"] = value(p_cr, cracked);
     _out["cracking_load_ec2_theory_n"] = 4.0 * _t.f_ct_fl_ec2 / _t.f_ct_fl * _t.m_cracking / _c.span;
-    _out["cracking_deflection_m"] = value(d_cr);
-    _out["cracked_stiffness_n_m"] = value(k_cr);
+    _out["cracking_deflection_m"] = value(d_cr, cracked);
+    _out["cracked_stiffness_n_m"] = value(k_cr, both);
     _out["cracked_stiffness_theory_n_m"] = k_cr_theory;
     _out["fully_cracked_stiffness_theory_n_m"] = k_fully_cracked;
-    _out["yield_load_n"] = value(_p_yield_model);
-    _out["yield_deflection_m"] = value(_d_yield_model);
-    _out["relative_error"] = {{"initial_stiffness", rel(k0, k0_theory)},
-                              {"cracking_load", rel(p_cr, _t.p_cracking)},
-                              {"cracked_stiffness", rel(k_cr, k_cr_theory)},
-                              {"yield_load", rel(_p_yield_model, _t.p_yield)}};
-    _out["bars_yielded"] = _p_yield_model > 0.0;
+    _out["yield_load_n"] = value(_p_yield_model, yielded);
+    _out["yield_deflection_m"] = value(_d_yield_model, yielded);
+    _out["relative_error"] = {{"initial_stiffness", rel(k0, k0_theory, k0 > 0.0)},
+                              {"cracking_load", rel(p_cr, _t.p_cracking, cracked)},
+                              {"cracked_stiffness", rel(k_cr, k_cr_theory, both)},
+                              {"yield_load", rel(_p_yield_model, _t.p_yield, yielded)}};
+    _out["bars_yielded"] = yielded;
     _out["peak_load_n"] = _load.empty() ? 0.0 : *std::max_element(_load.begin(), _load.end());
     _out["final_deflection_m"] = deflection();
     _out["final_load_n"] = load();
