@@ -77,6 +77,9 @@ def main():
         if len(v) < 3:
             sys.exit(f"{run}: fewer than 3 samples with the tip between {o.lo} and {o.hi} m deep")
         data.append((v, f))
+    if len(o.runs) == 1:
+        print("warning: one run: R and N are separated only by its slowing down within the window; give a "
+              "second run at another striking speed", file=sys.stderr)
     r, n = fit(data, area, o.density)
     print(f"window: tip {o.lo * 1e3:.0f}-{o.hi * 1e3:.0f} mm deep, {sum(len(v) for v, _ in data)} samples "
           f"from {len(o.runs)} runs")
