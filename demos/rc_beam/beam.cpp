@@ -54,14 +54,19 @@ BeamTheory beam_theory(const BeamConfig& c)
   return t;
 }
 
-double BeamTheory::deflection(const BeamConfig& c, double P) const
+double BeamTheory::deflection(const BeamConfig& c, double P, bool tension_stiffening) const
 {
   // delta = 2 int_0^{L/2} M m / (E I) dx, M = P x / 2, m = x / 2; cracked
   // where P x / 2 > M_cr, that is beyond x_cr = 2 M_cr / P
   const double E = c.concrete_modulus, half = c.span / 2.0;
   const double xc = P > 0.0 ? std::min(half, 2.0 * m_cracking / P) : half;
-  const double bending = P / (2.0 * E)
-                         * (xc * xc * xc / (3.0 * i_uncracked) + (half * half * half - xc * xc * xc) / (3.0 * i_cracked));
+  double bending = P / (2.0 * E)
+                   * (xc * xc * xc / (3.0 * i_uncracked) + (half * half * half - xc * xc * xc) / (3.0 * i_cracked));
+  // tension stiffening takes (M_cr^2 / M) (1 / (E I_cr) - 1 / (E I)) off the
+  // cracked part's curvature; with m = x / 2 that is (M_cr^2 / P) (...) at
+  // every x beyond x_cr
+  if (tension_stiffening && P > 0.0)
+    bending -= 2.0 * m_cracking * m_cracking / P * (1.0 / i_cracked - 1.0 / i_uncracked) / E * (half - xc);
   const double G = E / (2.0 * (1.0 + c.concrete_poisson));
   return bending + P * c.span / (4.0 * 5.0 / 6.0 * G * c.width * c.height);
 }
@@ -227,6 +232,14 @@ private:
     const auto& b = _solver->bars();
     return std::any_of(b.alpha.begin(), b.alpha.end(), [](double a) { return a > 0.0; });
   }
+  /// Where along the beam a bar yields first: the middle of the element
+  /// with the largest plastic strain [m from midspan].
+  double yield_section() const
+  {
+    const auto& b = _solver->bars();
+    const auto e = std::max_element(b.alpha.begin(), b.alpha.end()) - b.alpha.begin();
+    return 0.5 * (b.x0[3 * b.a[e]] + b.x0[3 * b.b[e]]);
+  }
   std::size_t broken() const
   {
     return _links.count(LinkState::broken_tension) + _links.count(LinkState::broken_shear);
@@ -251,9 +264,17 @@ private:
     const std::int64_t every = std::max<std::int64_t>(1, steps / 1000), frame = std::max<std::int64_t>(1, steps / _c.frames);
     Stopwatch clock;
     double last = -1e9;
+    // the load recorded is the plate's reaction averaged over the steps
+    // since the last sample, as a load cell averages: sampled once in a
+    // while, the reaction would alias the spheres' own vibration under
+    // the plate (some 5-15 % of the load while the concrete cracks)
+    double load_sum = 0.0;
+    std::int64_t load_steps = 0;
     while (deflection() < _target && _solver->steps() < 2 * steps)
     {
       _solver->step();
+      load_sum += load();
+      ++load_steps;
       const std::int64_t s = _solver->steps();
       if (pw && s % frame == 0)
       {
@@ -264,15 +285,19 @@ private:
       if (s % every != 0 && (_c.quiet || clock.seconds() - last <= 2.0))
         continue;
       const double stress = bar_stress();
+      const double mean_load = load_sum / static_cast<double>(load_steps);
       if (_p_yield_model == 0.0 && yielded())
       {
-        _p_yield_model = load();
+        _p_yield_model = mean_load;
         _d_yield_model = deflection();
+        _x_yield_model = yield_section();
       }
       if (s % every == 0)
       {
         _delta.push_back(deflection());
-        _load.push_back(load());
+        _load.push_back(mean_load);
+        load_sum = 0.0;
+        load_steps = 0;
         if (csv.is_open())
           csv << std::setprecision(10) << _solver->time() << "," << _delta.back() << "," << _load.back() << ","
               << broken() << "," << stress << "\n";
@@ -335,6 +360,8 @@ private:
     const double k_cr = _d_yield_model > d_cr && p_cr > 0.0 ? (_p_yield_model - p_cr) / (_d_yield_model - d_cr) : 0.0;
     const double k_cr_theory =
         (_t.p_yield - _t.p_cracking) / (_t.deflection(_c, _t.p_yield) - _t.deflection(_c, _t.p_cracking));
+    const double k_cr_ec2 = (_t.p_yield - _t.p_cracking)
+                            / (_t.deflection(_c, _t.p_yield, true) - _t.deflection(_c, _t.p_cracking, true));
     const double k0_theory = 0.1 * _t.p_cracking / _t.deflection(_c, 0.1 * _t.p_cracking);
     const double G = _c.concrete_modulus / (2.0 * (1.0 + _c.concrete_poisson));
     const double k_fully_cracked = 1.0 / (std::pow(_c.span, 3) / (48.0 * _c.concrete_modulus * _t.i_cracked)
@@ -355,12 +382,28 @@ private:
     _out["cracked_stiffness_n_m"] = value(k_cr, both);
     _out["cracked_stiffness_theory_n_m"] = k_cr_theory;
     _out["fully_cracked_stiffness_theory_n_m"] = k_fully_cracked;
+    _out["cracked_stiffness_tension_stiffening_theory_n_m"] = k_cr_ec2;
+    // the secant from the origin to first yield, P_y / delta_y: the
+    // effective stiffness of a cracked member (EI_eff = M_y / phi_y), which
+    // needs no cracking point
+    const double k_y = yielded && _d_yield_model > 0.0 ? _p_yield_model / _d_yield_model : 0.0;
+    const double k_y_theory = _t.p_yield / _t.deflection(_c, _t.p_yield);
+    _out["yield_secant_stiffness_n_m"] = value(k_y, k_y > 0.0);
+    _out["yield_secant_stiffness_theory_n_m"] = k_y_theory;
     _out["yield_load_n"] = value(_p_yield_model, yielded);
     _out["yield_deflection_m"] = value(_d_yield_model, yielded);
+    // the theory's first yield at the section where the bars yield, M_y =
+    // P (L / 2 - |x|) / 2: the crack that yields first need not be at midspan
+    const bool inside = yielded && std::abs(_x_yield_model) < 0.5 * _c.span;
+    const double p_yield_there = inside ? 2.0 * _t.m_yield / (_c.span / 2.0 - std::abs(_x_yield_model)) : 0.0;
+    _out["yield_section_x_m"] = value(_x_yield_model, yielded);
+    _out["yield_load_at_section_theory_n"] = value(p_yield_there, inside);
     _out["relative_error"] = {{"initial_stiffness", rel(k0, k0_theory, k0 > 0.0)},
                               {"cracking_load", rel(p_cr, _t.p_cracking, cracked)},
                               {"cracked_stiffness", rel(k_cr, k_cr_theory, both)},
-                              {"yield_load", rel(_p_yield_model, _t.p_yield, yielded)}};
+                              {"yield_secant_stiffness", rel(k_y, k_y_theory, k_y > 0.0)},
+                              {"yield_load", rel(_p_yield_model, _t.p_yield, yielded)},
+                              {"yield_load_at_section", rel(_p_yield_model, p_yield_there, inside)}};
     _out["bars_yielded"] = yielded;
     _out["peak_load_n"] = _load.empty() ? 0.0 : *std::max_element(_load.begin(), _load.end());
     _out["final_deflection_m"] = deflection();
@@ -382,7 +425,7 @@ private:
   std::size_t _bonds = 0;
   SkinCompensation _skin;
   double _rmax = 0.0, _dt = 0.0, _damping = 0.0, _ramp = 0.0, _target = 0.0, _p_yield_model = 0.0,
-         _d_yield_model = 0.0;
+         _d_yield_model = 0.0, _x_yield_model = 0.0;
   std::vector<std::int32_t> _left, _right, _plate, _gauge;
   std::unique_ptr<DemSolver> _solver;
   std::vector<double> _delta, _load;

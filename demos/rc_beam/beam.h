@@ -54,7 +54,10 @@ struct BeamConfig
 /// the first-yield moment A_s f_y (d - c / 3), and the deflection at a
 /// midspan load P, integrating the curvature M / (E I) with I uncracked
 /// where |M| < M_cr and cracked elsewhere, plus the shear deflection
-/// P L / (4 kappa G A).
+/// P L / (4 kappa G A). With tension stiffening (Eurocode 2, 7.4.3, eq.
+/// 7.18-7.19, a single short-term load: beta = 1) the cracked part's
+/// curvature is zeta M / (E I_cr) + (1 - zeta) M / (E I), zeta = 1 - (M_cr / M)^2:
+/// the concrete between the cracks still carries tension.
 struct BeamTheory
 {
   double n = 0.0, d = 0.0;                 ///< modular ratio; depth of the bars [m]
@@ -64,7 +67,7 @@ struct BeamTheory
   double f_ct_fl_ec2 = 0.0;                  ///< the same of Eurocode 2 [Pa]
   double m_cracking = 0.0, p_cracking = 0.0; ///< [N m], [N]
   double m_yield = 0.0, p_yield = 0.0;       ///< [N m], [N]
-  double deflection(const BeamConfig& c, double load) const; ///< [m]
+  double deflection(const BeamConfig& c, double load, bool tension_stiffening = false) const; ///< [m]
 };
 BeamTheory beam_theory(const BeamConfig& c);
 
