@@ -62,11 +62,16 @@ double BeamTheory::deflection(const BeamConfig& c, double P, bool tension_stiffe
   const double xc = P > 0.0 ? std::min(half, 2.0 * m_cracking / P) : half;
   double bending = P / (2.0 * E)
                    * (xc * xc * xc / (3.0 * i_uncracked) + (half * half * half - xc * xc * xc) / (3.0 * i_cracked));
-  // tension stiffening takes (M_cr^2 / M) (1 / (E I_cr) - 1 / (E I)) off the
-  // cracked part's curvature; with m = x / 2 that is (M_cr^2 / P) (...) at
+  // tension stiffening takes (M_t^2 / M) (1 / (E I_cr) - 1 / (E I)) off the
+  // cracked part's curvature; with m = x / 2 that is (M_t^2 / P) (...) at
   // every x beyond x_cr
+  // (Eurocode 2, 7.1(2): tension stiffening with f_ctm, so zeta's M_cr is
+  // the moment at sigma_t, while the cracked zone starts at f_ct,fl's)
   if (tension_stiffening && P > 0.0)
-    bending -= 2.0 * m_cracking * m_cracking / P * (1.0 / i_cracked - 1.0 / i_uncracked) / E * (half - xc);
+  {
+    const double m_ts = m_cracking * c.tensile_strength / f_ct_fl;
+    bending -= 2.0 * m_ts * m_ts / P * (1.0 / i_cracked - 1.0 / i_uncracked) / E * (half - xc);
+  }
   const double G = E / (2.0 * (1.0 + c.concrete_poisson));
   return bending + P * c.span / (4.0 * 5.0 / 6.0 * G * c.width * c.height);
 }
@@ -285,15 +290,17 @@ private:
       if (s % every != 0 && (_c.quiet || clock.seconds() - last <= 2.0))
         continue;
       const double stress = bar_stress();
-      const double mean_load = load_sum / static_cast<double>(load_steps);
-      if (_p_yield_model == 0.0 && yielded())
-      {
-        _p_yield_model = mean_load;
-        _d_yield_model = deflection();
-        _x_yield_model = yield_section();
-      }
       if (s % every == 0)
       {
+        // first yield is read at the samples only, with the interval's
+        // mean load, so that it does not depend on the progress prints
+        const double mean_load = load_sum / static_cast<double>(load_steps);
+        if (_p_yield_model == 0.0 && yielded())
+        {
+          _p_yield_model = mean_load;
+          _d_yield_model = deflection();
+          _x_yield_model = yield_section();
+        }
         _delta.push_back(deflection());
         _load.push_back(mean_load);
         load_sum = 0.0;
@@ -304,7 +311,8 @@ private:
       }
       if (!_c.quiet && clock.seconds() - last > 2.0)
       {
-        std::cout << std::setw(14) << _solver->time() << std::setw(16) << deflection() << std::setw(10) << load()
+        std::cout << std::setw(14) << _solver->time() << std::setw(16) << deflection() << std::setw(10)
+                  << (_load.empty() ? load() : _load.back())
                   << std::setw(14) << broken() << std::setw(21) << stress << std::endl;
         last = clock.seconds();
       }
@@ -358,10 +366,13 @@ private:
     const double k0 = slope(_delta, _load, 0.1 * _t.p_cracking, 0.5 * _t.p_cracking);
     const auto [p_cr, d_cr] = cracking_point(k0);
     const double k_cr = _d_yield_model > d_cr && p_cr > 0.0 ? (_p_yield_model - p_cr) / (_d_yield_model - d_cr) : 0.0;
-    const double k_cr_theory =
-        (_t.p_yield - _t.p_cracking) / (_t.deflection(_c, _t.p_yield) - _t.deflection(_c, _t.p_cracking));
-    const double k_cr_ec2 = (_t.p_yield - _t.p_cracking)
-                            / (_t.deflection(_c, _t.p_yield, true) - _t.deflection(_c, _t.p_cracking, true));
+    // (0 where the bars yield before the concrete cracks: no cracked branch)
+    auto secant = [&](bool ts)
+    {
+      const double dd = _t.deflection(_c, _t.p_yield, ts) - _t.deflection(_c, _t.p_cracking, ts);
+      return _t.p_yield > _t.p_cracking && dd > 0.0 ? (_t.p_yield - _t.p_cracking) / dd : 0.0;
+    };
+    const double k_cr_theory = secant(false), k_cr_ec2 = secant(true);
     const double k0_theory = 0.1 * _t.p_cracking / _t.deflection(_c, 0.1 * _t.p_cracking);
     const double G = _c.concrete_modulus / (2.0 * (1.0 + _c.concrete_poisson));
     const double k_fully_cracked = 1.0 / (std::pow(_c.span, 3) / (48.0 * _c.concrete_modulus * _t.i_cracked)
@@ -407,7 +418,7 @@ private:
     _out["bars_yielded"] = yielded;
     _out["peak_load_n"] = _load.empty() ? 0.0 : *std::max_element(_load.begin(), _load.end());
     _out["final_deflection_m"] = deflection();
-    _out["final_load_n"] = load();
+    _out["final_load_n"] = _load.empty() ? load() : _load.back();
     _out["links_broken"] = broken();
     _out["steps"] = _solver->steps();
     const auto e = _solver->energy();

@@ -56,8 +56,10 @@ struct BeamConfig
 /// where |M| < M_cr and cracked elsewhere, plus the shear deflection
 /// P L / (4 kappa G A). With tension stiffening (Eurocode 2, 7.4.3, eq.
 /// 7.18-7.19, a single short-term load: beta = 1) the cracked part's
-/// curvature is zeta M / (E I_cr) + (1 - zeta) M / (E I), zeta = 1 - (M_cr / M)^2:
-/// the concrete between the cracks still carries tension.
+/// curvature is zeta M / (E I_cr) + (1 - zeta) M / (E I), zeta = 1 - (M_t / M)^2,
+/// M_t the moment at which the uncracked section reaches sigma_t (f_ctm, as
+/// Eurocode 2 7.1(2) asks for tension stiffening): the concrete between the
+/// cracks still carries tension.
 struct BeamTheory
 {
   double n = 0.0, d = 0.0;                 ///< modular ratio; depth of the bars [m]
