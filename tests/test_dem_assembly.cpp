@@ -486,6 +486,9 @@ TEST_CASE("DEM bad input", "[dem][errors]")
   m = {};
   m.youngs_modulus = 0.0;
   CHECK_THROWS_WITH(m.validate(), Contains("Young"));
+  m = {};
+  m.rate_filter = 2.0; // the scenario files and dem_sample allow up to 1 s
+  CHECK_THROWS_WITH(m.validate(), Contains("filter") && Contains("[0, 1] s"));
   std::vector<double> x{0, 0, 0}, r{-1.0};
   CHECK_THROWS_WITH(make_particles(x, r, 2400.0, 0.6), Contains("radius of sphere 0 = -1"));
   auto p = lattice(2);

@@ -12,6 +12,7 @@
 #include <iomanip>
 #include <iostream>
 #include <numbers>
+#include <numeric>
 #include <stdexcept>
 
 namespace dembridge::demo
@@ -179,7 +180,72 @@ private:
                          [=](double t) { return -v * std::min(1.0, t / ramp); }});
     _solver->add_bars(_bars);
     _solver->start();
+    cover_strip();
     describe();
+  }
+
+  /// The cover's strip: the spheres whose centres lie below the bars' axis
+  /// between the supports, the links between them, and its two ends (the
+  /// spheres within 2 Rmax of either support line).
+  void cover_strip()
+  {
+    const double half = _c.span / 2.0;
+    std::vector<std::int32_t> local(_p.size(), -1);
+    std::int32_t n = 0;
+    for (std::size_t i = 0; i < _p.size(); ++i)
+      if (_p.x0[3 * i + 2] < _c.cover && std::abs(_p.x0[3 * i]) <= half)
+      {
+        local[i] = n++;
+        _strip_x.push_back(_p.x0[3 * i]);
+      }
+    for (std::size_t k = 0; k < _links.size(); ++k)
+      if (local[_links.a[k]] >= 0 && local[_links.b[k]] >= 0)
+        _strip_links.push_back(static_cast<std::int32_t>(k));
+    _strip_local = std::move(local);
+    _strip_joined = !cover_cut().first; // a strip that is not one piece at the start cannot be cut
+  }
+
+  /// A link past its tensile peak (softening, K_n delta_max > S_int T) or
+  /// broken: a crack runs through it.
+  bool cracked(std::size_t k) const
+  {
+    if (_links.state[k] != LinkState::intact)
+      return true;
+    const double strength = _links.strength.empty() ? 1.0 : _links.strength[k];
+    return _links.kn[k] * _links.delta_max[k] > link_surface(_p, _links, k) * _c.material.tensile * strength;
+  }
+
+  /// Whether a crack has cut the cover's strip: its uncracked links no
+  /// longer join the spheres at its left end to those at its right end
+  /// (union-find over the strip). Second: where, the furthest x reached
+  /// from the left end [m].
+  std::pair<bool, double> cover_cut() const
+  {
+    std::vector<std::int32_t> root(_strip_x.size());
+    std::iota(root.begin(), root.end(), 0);
+    auto find = [&](std::int32_t i)
+    {
+      while (root[i] != i)
+        i = root[i] = root[root[i]];
+      return i;
+    };
+    for (const std::int32_t k : _strip_links)
+      if (!cracked(k))
+        root[find(_strip_local[_links.a[k]])] = find(_strip_local[_links.b[k]]);
+    const double half = _c.span / 2.0, end = 2.0 * _rmax;
+    std::vector<char> left(_strip_x.size(), 0);
+    for (std::size_t i = 0; i < _strip_x.size(); ++i)
+      if (_strip_x[i] < -half + end)
+        left[find(static_cast<std::int32_t>(i))] = 1;
+    double reach = -half;
+    bool joined = false;
+    for (std::size_t i = 0; i < _strip_x.size(); ++i)
+      if (left[find(static_cast<std::int32_t>(i))])
+      {
+        reach = std::max(reach, _strip_x[i]);
+        joined = joined || _strip_x[i] > half - end;
+      }
+    return {!joined, reach};
   }
 
   void describe()
@@ -245,6 +311,17 @@ private:
     const auto e = std::max_element(b.alpha.begin(), b.alpha.end()) - b.alpha.begin();
     return 0.5 * (b.x0[3 * b.a[e]] + b.x0[3 * b.b[e]]);
   }
+  /// The bars' elements at first yield: the axial force and plastic
+  /// strain along each bar.
+  void write_bars_at_yield(const std::filesystem::path& file) const
+  {
+    const auto& b = _solver->bars();
+    std::ofstream out(file);
+    out << "bar,x_m,axial_force_n,stress_pa,plastic_strain\n" << std::setprecision(10);
+    for (std::size_t e = 0; e < b.elements(); ++e)
+      out << b.line[e] << "," << 0.5 * (b.x0[3 * b.a[e]] + b.x0[3 * b.b[e]]) << "," << b.force[e] << ","
+          << b.force[e] / b.area[e] << "," << b.alpha[e] << "\n";
+  }
   std::size_t broken() const
   {
     return _links.count(LinkState::broken_tension) + _links.count(LinkState::broken_shear);
@@ -300,9 +377,17 @@ private:
           _p_yield_model = mean_load;
           _d_yield_model = deflection();
           _x_yield_model = yield_section();
+          if (!_c.output_dir.empty())
+            write_bars_at_yield(std::filesystem::path(_c.output_dir) / "bars_first_yield.csv");
         }
         _delta.push_back(deflection());
         _load.push_back(mean_load);
+        if (_strip_joined && _cut_sample < 0)
+          if (const auto [cut, x] = cover_cut(); cut)
+          {
+            _cut_sample = static_cast<std::int64_t>(_load.size()) - 1;
+            _cut_x = x;
+          }
         load_sum = 0.0;
         load_steps = 0;
         if (csv.is_open())
@@ -324,37 +409,18 @@ private:
     }
   }
 
-  /// The cracking load and deflection. The displacement-driven plate
-  /// sees the load drop when the first flexural crack opens through the
-  /// tension zone (a beam whose bars cannot carry the cracking moment
-  /// once cracked): the cracking load is the largest load before the
-  /// load first falls 15 % below its running maximum (well above the
-  /// ~5 % ripples of the loading; counted from the first load past 30 % of
-  /// the theory's cracking load, clear of the ramp). Without such a drop before first yield (a
-  /// beam reinforced enough to carry it), the kink: the first point past
-  /// 30 % of the theory's cracking load whose secant falls below 90 % of
-  /// the initial stiffness k0.
-  std::pair<double, double> cracking_point(double k0) const
+  /// The cracking load and deflection: the largest load up to the sample
+  /// at which a crack first cut the cover's strip (cover_cut), and the
+  /// deflection there. A flexural crack opens at the peak of the
+  /// uncracked branch and runs through the cover within a few samples;
+  /// the concrete's microcracking before the peak (single links past
+  /// their strength) does not cut the strip.
+  std::pair<double, double> cracking_point() const
   {
-    double top = 0.0, d_top = 0.0;
-    for (std::size_t k = 0; k < _load.size(); ++k)
-    {
-      if (_d_yield_model > 0.0 && _delta[k] >= _d_yield_model)
-        break;
-      if (top == 0.0 && _load[k] < 0.3 * _t.p_cracking)
-        continue;
-      if (_load[k] > top)
-      {
-        top = _load[k];
-        d_top = _delta[k];
-      }
-      else if (_load[k] < 0.85 * top)
-        return {top, d_top};
-    }
-    for (std::size_t k = 0; k < _load.size(); ++k)
-      if (_load[k] > 0.3 * _t.p_cracking && _delta[k] > 0.0 && _load[k] / _delta[k] < 0.9 * k0)
-        return {_load[k], _delta[k]};
-    return {0.0, 0.0};
+    if (_cut_sample < 0)
+      return {0.0, 0.0};
+    const auto top = std::max_element(_load.begin(), _load.begin() + _cut_sample + 1) - _load.begin();
+    return {_load[top], _delta[top]};
   }
 
   void report()
@@ -364,7 +430,7 @@ private:
     // cracking to first yield (the theory's likewise, between its own
     // cracking and first-yield points)
     const double k0 = slope(_delta, _load, 0.1 * _t.p_cracking, 0.5 * _t.p_cracking);
-    const auto [p_cr, d_cr] = cracking_point(k0);
+    const auto [p_cr, d_cr] = cracking_point();
     const double k_cr = _d_yield_model > d_cr && p_cr > 0.0 ? (_p_yield_model - p_cr) / (_d_yield_model - d_cr) : 0.0;
     // (0 where the bars yield before the concrete cracks: no cracked branch)
     auto secant = [&](bool ts)
@@ -390,6 +456,7 @@ private:
     _out["cracking_load_n"] = value(p_cr, cracked);
     _out["cracking_load_ec2_theory_n"] = 4.0 * _t.f_ct_fl_ec2 / _t.f_ct_fl * _t.m_cracking / _c.span;
     _out["cracking_deflection_m"] = value(d_cr, cracked);
+    _out["cracking_section_x_m"] = value(_cut_x, cracked);
     _out["cracked_stiffness_n_m"] = value(k_cr, both);
     _out["cracked_stiffness_theory_n_m"] = k_cr_theory;
     _out["fully_cracked_stiffness_theory_n_m"] = k_fully_cracked;
@@ -440,6 +507,12 @@ private:
   std::vector<std::int32_t> _left, _right, _plate, _gauge;
   std::unique_ptr<DemSolver> _solver;
   std::vector<double> _delta, _load;
+  // the cover's strip (cover_strip) and the sample where a crack first cut it
+  std::vector<std::int32_t> _strip_local, _strip_links;
+  std::vector<double> _strip_x;
+  bool _strip_joined = false;
+  std::int64_t _cut_sample = -1;
+  double _cut_x = 0.0;
 };
 } // namespace
 
