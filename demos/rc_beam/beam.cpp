@@ -322,6 +322,59 @@ private:
       out << b.line[e] << "," << 0.5 * (b.x0[3 * b.a[e]] + b.x0[3 * b.b[e]]) << "," << b.force[e] << ","
           << b.force[e] / b.area[e] << "," << b.alpha[e] << "\n";
   }
+  /// The axial forces across the section x = xs (world): the bars' and
+  /// the concrete links' that cross it (tension > 0, with their mean
+  /// heights), and the internal moment they make, sum N_i (z_ref - z_i)
+  /// (independent of z_ref when they balance). The contacts of spheres
+  /// whose links broke are left out: the balance says how much they carry.
+  nlohmann::json section_forces(double xs) const
+  {
+    double steel = 0.0, steel_z = 0.0, tension = 0.0, tension_z = 0.0, compression = 0.0, compression_z = 0.0;
+    const auto& bars = _solver->bars();
+    for (std::size_t e = 0; e < bars.elements(); ++e)
+    {
+      const double* xa = &bars.x[3 * bars.a[e]];
+      const double* xb = &bars.x[3 * bars.b[e]];
+      if ((xa[0] - xs) * (xb[0] - xs) < 0.0)
+      {
+        steel += bars.force[e];
+        steel_z += bars.force[e] * 0.5 * (xa[2] + xb[2]);
+      }
+    }
+    const LinkLaw base = _c.material.law(1.0, 1.0, 1.0);
+    for (std::size_t k = 0; k < _links.size(); ++k)
+    {
+      const double* xa = &_p.x[3 * _links.a[k]];
+      const double* xb = &_p.x[3 * _links.b[k]];
+      if (_links.state[k] != LinkState::intact || !((xa[0] - xs) * (xb[0] - xs) < 0.0))
+        continue;
+      const double d[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+      const double D = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      LinkLaw law = base;
+      law.kn = _links.kn[k];
+      law.s_int = link_surface(_p, _links, k);
+      if (!_links.strength.empty())
+        law.tensile *= _links.strength[k];
+      const double fn = link_normal_force(D - _links.d0[k], _links.delta_max[k], law).fn;
+      // the force on b, -fn n + fs, along x; on the right part's sphere
+      double fx = -fn * d[0] / D + _links.fs[3 * k];
+      if (xb[0] < xs)
+        fx = -fx;
+      const double N = -fx, z = 0.5 * (xa[2] + xb[2]);
+      (N > 0.0 ? tension : compression) += N;
+      (N > 0.0 ? tension_z : compression_z) += N * z;
+    }
+    const double moment = -(steel_z + tension_z + compression_z); // sum N_i (0 - z_i)
+    return {{"x_m", xs},
+            {"steel_n", steel},
+            {"steel_height_m", steel != 0.0 ? steel_z / steel : 0.0},
+            {"concrete_tension_n", tension},
+            {"concrete_tension_height_m", tension > 0.0 ? tension_z / tension : 0.0},
+            {"concrete_compression_n", compression},
+            {"concrete_compression_height_m", compression < 0.0 ? compression_z / compression : 0.0},
+            {"balance_n", steel + tension + compression},
+            {"internal_moment_n_m", moment}};
+  }
   std::size_t broken() const
   {
     return _links.count(LinkState::broken_tension) + _links.count(LinkState::broken_shear);
@@ -377,6 +430,10 @@ private:
           _p_yield_model = mean_load;
           _d_yield_model = deflection();
           _x_yield_model = yield_section();
+          _yield_forces = section_forces(_x_yield_model);
+          const double m_ext = 0.5 * mean_load * (0.5 * _c.span - std::abs(_x_yield_model));
+          _yield_forces["external_moment_n_m"] = m_ext;
+          _yield_forces["moment_ratio"] = _yield_forces["internal_moment_n_m"].get<double>() / m_ext;
           if (!_c.output_dir.empty())
             write_bars_at_yield(std::filesystem::path(_c.output_dir) / "bars_first_yield.csv");
         }
@@ -476,6 +533,7 @@ private:
     const double p_yield_there = inside ? 2.0 * _t.m_yield / (_c.span / 2.0 - std::abs(_x_yield_model)) : 0.0;
     _out["yield_section_x_m"] = value(_x_yield_model, yielded);
     _out["yield_load_at_section_theory_n"] = value(p_yield_there, inside);
+    _out["yield_section_forces"] = _yield_forces;
     _out["relative_error"] = {{"initial_stiffness", rel(k0, k0_theory, k0 > 0.0)},
                               {"cracking_load", rel(p_cr, _t.p_cracking, cracked)},
                               {"cracked_stiffness", rel(k_cr, k_cr_theory, both)},
@@ -513,6 +571,7 @@ private:
   bool _strip_joined = false;
   std::int64_t _cut_sample = -1;
   double _cut_x = 0.0;
+  nlohmann::json _yield_forces; ///< section_forces at the first yield's section then
 };
 } // namespace
 
