@@ -203,6 +203,11 @@ private:
         _strip_links.push_back(static_cast<std::int32_t>(k));
     _strip_local = std::move(local);
     _strip_joined = !cover_cut().first; // a strip that is not one piece at the start cannot be cut
+    if (!_strip_joined)
+      std::cerr << "rc_beam: warning: the cover's strip (" << _strip_x.size() << " spheres below the bars' axis, "
+                << _strip_links.size()
+                << " links) is not one piece before loading: no cracking point can be read (spheres too "
+                   "large for the cover?)\n";
   }
 
   /// A link past its tensile peak (softening, K_n delta_max > S_int T) or
@@ -254,6 +259,7 @@ private:
     _out["links"] = _links.size();
     _out["bar_elements"] = _bars.elements();
     _out["bonds"] = _bonds;
+    _out["cover_strip"] = {{"spheres", _strip_x.size()}, {"links", _strip_links.size()}, {"joined", _strip_joined}};
     _out["skin_compensation"] = {{"on", _c.skin_compensation}, {"spheres", _skin.spheres}, {"links", _skin.links},
                                  {"mean_link_factor", _skin.mean_link_factor}};
     _out["dt_s"] = _dt;
@@ -322,45 +328,52 @@ private:
       out << b.line[e] << "," << 0.5 * (b.x0[3 * b.a[e]] + b.x0[3 * b.b[e]]) << "," << b.force[e] << ","
           << b.force[e] / b.area[e] << "," << b.alpha[e] << "\n";
   }
-  /// The axial forces across the section x = xs (world): the bars' and
-  /// the concrete links' that cross it (tension > 0, with their mean
-  /// heights), and the internal moment they make, sum N_i (z_ref - z_i)
-  /// (independent of z_ref when they balance). The contacts of spheres
-  /// whose links broke are left out: the balance says how much they carry.
+  /// The forces along the beam (x) across the section x = xs: the bars'
+  /// and the concrete links' that cross it (tension > 0), with their mean
+  /// heights above the bottom face (reference positions), and the moment
+  /// they make, sum N_i (z_ref - z_i) (independent of z_ref when they
+  /// balance). The contacts of spheres whose links broke are left out: the
+  /// balance says how much they carry.
   nlohmann::json section_forces(double xs) const
   {
     double steel = 0.0, steel_z = 0.0, tension = 0.0, tension_z = 0.0, compression = 0.0, compression_z = 0.0;
     const auto& bars = _solver->bars();
     for (std::size_t e = 0; e < bars.elements(); ++e)
     {
-      const double* xa = &bars.x[3 * bars.a[e]];
-      const double* xb = &bars.x[3 * bars.b[e]];
-      if ((xa[0] - xs) * (xb[0] - xs) < 0.0)
+      const std::int32_t a = bars.a[e], b = bars.b[e];
+      if ((bars.x[3 * a] - xs) * (bars.x[3 * b] - xs) < 0.0)
       {
         steel += bars.force[e];
-        steel_z += bars.force[e] * 0.5 * (xa[2] + xb[2]);
+        steel_z += bars.force[e] * 0.5 * (bars.x0[3 * a + 2] + bars.x0[3 * b + 2]);
       }
     }
     const LinkLaw base = _c.material.law(1.0, 1.0, 1.0);
+    const bool compacting = _c.material.compaction.on() && _links.compaction.size() == _links.size();
     for (std::size_t k = 0; k < _links.size(); ++k)
     {
-      const double* xa = &_p.x[3 * _links.a[k]];
-      const double* xb = &_p.x[3 * _links.b[k]];
+      const std::int32_t a = _links.a[k], b = _links.b[k];
+      const double* xa = &_p.x[3 * a];
+      const double* xb = &_p.x[3 * b];
       if (_links.state[k] != LinkState::intact || !((xa[0] - xs) * (xb[0] - xs) < 0.0))
         continue;
       const double d[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
       const double D = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      // the link's law as the force loop applies it (its K_n, strength
+      // factor and compaction set; rc_beam's links carry no weights)
       LinkLaw law = base;
       law.kn = _links.kn[k];
       law.s_int = link_surface(_p, _links, k);
       if (!_links.strength.empty())
         law.tensile *= _links.strength[k];
-      const double fn = link_normal_force(D - _links.d0[k], _links.delta_max[k], law).fn;
+      double delta = D - _links.d0[k];
+      if (compacting)
+        delta -= compaction_set(_links.compaction[k], _links.d0[k], _c.material.compaction);
+      const double fn = link_normal_force(delta, _links.delta_max[k], law).fn;
       // the force on b, -fn n + fs, along x; on the right part's sphere
       double fx = -fn * d[0] / D + _links.fs[3 * k];
       if (xb[0] < xs)
         fx = -fx;
-      const double N = -fx, z = 0.5 * (xa[2] + xb[2]);
+      const double N = -fx, z = 0.5 * (_p.x0[3 * a + 2] + _p.x0[3 * b + 2]);
       (N > 0.0 ? tension : compression) += N;
       (N > 0.0 ? tension_z : compression_z) += N * z;
     }
@@ -431,9 +444,14 @@ private:
           _d_yield_model = deflection();
           _x_yield_model = yield_section();
           _yield_forces = section_forces(_x_yield_model);
-          const double m_ext = 0.5 * mean_load * (0.5 * _c.span - std::abs(_x_yield_model));
-          _yield_forces["external_moment_n_m"] = m_ext;
-          _yield_forces["moment_ratio"] = _yield_forces["internal_moment_n_m"].get<double>() / m_ext;
+          // the load's moment there, with the interval's mean load (the
+          // forces are the state at the sample); none outside the span
+          const double arm = 0.5 * _c.span - std::abs(_x_yield_model);
+          const double m_ext = 0.5 * mean_load * arm;
+          _yield_forces["external_moment_n_m"] = arm > 0.0 ? nlohmann::json(m_ext) : nlohmann::json(nullptr);
+          _yield_forces["moment_ratio"] = arm > 0.0 && m_ext > 0.0
+                                              ? nlohmann::json(_yield_forces["internal_moment_n_m"].get<double>() / m_ext)
+                                              : nlohmann::json(nullptr);
           if (!_c.output_dir.empty())
             write_bars_at_yield(std::filesystem::path(_c.output_dir) / "bars_first_yield.csv");
         }

@@ -45,8 +45,8 @@ struct Material
   /// (false: the shear strength stays the quasi-static one).
   bool rate_cohesion = true;
   /// Time constant of the low-pass filter on each link's strain rate before
-  /// the factor is taken from it [s]: r_f += min(1, dt / tau) (r - r_f); 0 =
-  /// no filter (the factor follows the rate of every step).
+  /// the factor is taken from it [s], in [0, 1]: r_f += min(1, dt / tau)
+  /// (r - r_f); 0 = no filter (the factor follows the rate of every step).
   double rate_filter = 0.0;
   /// Whether a link's factor grows only while its spheres are, on the whole,
   /// stretched: the sum of K_n (D - D_init) D over both spheres' intact
