@@ -152,6 +152,7 @@ private:
     const double I = _c.width * std::pow(_c.height, 3) / 12.0, A = _c.width * _c.height;
     const double w1 = std::pow(pi / _c.span, 2) * std::sqrt(E * I / (rho * A));
     _damping = _c.damping > 0.0 ? _c.damping : 0.1 * w1;
+    _period = 2.0 * pi / w1;
     _ramp = _c.ramp_time > 0.0 ? _c.ramp_time : 4.0 * 2.0 * pi / w1;
     _target = _c.deflection > 0.0 ? _c.deflection : 2.0 * _t.deflection(_c, _t.p_yield);
     _dt = _c.safety * critical_time_step(_p, _links, _c.material, _bars);
@@ -416,12 +417,14 @@ private:
     // since the last sample, as a load cell averages: sampled once in a
     // while, the reaction would alias the spheres' own vibration under
     // the plate (some 5-15 % of the load while the concrete cracks)
-    double load_sum = 0.0;
+    double load_sum = 0.0, left_sum = 0.0, right_sum = 0.0; // and the supports' upward reactions
     std::int64_t load_steps = 0;
     while (deflection() < _target && _solver->steps() < 2 * steps)
     {
       _solver->step();
       load_sum += load();
+      left_sum += _solver->reaction("left")[2];
+      right_sum += _solver->reaction("right")[2];
       ++load_steps;
       const std::int64_t s = _solver->steps();
       if (pw && s % frame == 0)
@@ -441,6 +444,7 @@ private:
         if (_p_yield_model == 0.0 && yielded())
         {
           _p_yield_model = mean_load;
+          _yield_sample = _load.size(); // the index this sample takes below
           _d_yield_model = deflection();
           _x_yield_model = yield_section();
           _yield_forces = section_forces(_x_yield_model);
@@ -449,12 +453,15 @@ private:
           const double arm = 0.5 * _c.span - std::abs(_x_yield_model);
           const double m_ext = 0.5 * mean_load * arm;
           _yield_forces["external_moment_n_m"] = arm > 0.0 ? nlohmann::json(m_ext) : nlohmann::json(nullptr);
+          _yield_forces["left_support_n"] = left_sum / static_cast<double>(load_steps);
+          _yield_forces["right_support_n"] = right_sum / static_cast<double>(load_steps);
           _yield_forces["moment_ratio"] = arm > 0.0 && m_ext > 0.0
                                               ? nlohmann::json(_yield_forces["internal_moment_n_m"].get<double>() / m_ext)
                                               : nlohmann::json(nullptr);
           if (!_c.output_dir.empty())
             write_bars_at_yield(std::filesystem::path(_c.output_dir) / "bars_first_yield.csv");
         }
+        _times.push_back(_solver->time());
         _delta.push_back(deflection());
         _load.push_back(mean_load);
         if (_strip_joined && _cut_sample < 0)
@@ -463,7 +470,7 @@ private:
             _cut_sample = static_cast<std::int64_t>(_load.size()) - 1;
             _cut_x = x;
           }
-        load_sum = 0.0;
+        load_sum = left_sum = right_sum = 0.0;
         load_steps = 0;
         if (csv.is_open())
           csv << std::setprecision(10) << _solver->time() << "," << _delta.back() << "," << _load.back() << ","
@@ -498,6 +505,34 @@ private:
     return {_load[top], _delta[top]};
   }
 
+  /// The load at first yield, read on a straight line fitted (least
+  /// squares) to the load against the deflection over the first bending
+  /// mode's period before it. Once cracks open, the samples' load carries
+  /// the beam's vibration (+-10 % and more), and the bars first yield on
+  /// one of its peaks; a period's fit averages it out, and the branch
+  /// before first yield is nearly straight. With fewer than 3 samples in
+  /// that period: the sample's own load.
+  double yield_load_fitted() const
+  {
+    const std::size_t k = _yield_sample;
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    int n = 0;
+    for (std::size_t j = 0; j <= k; ++j)
+      if (_times[j] > _times[k] - _period)
+      {
+        sx += _delta[j];
+        sy += _load[j];
+        sxx += _delta[j] * _delta[j];
+        sxy += _delta[j] * _load[j];
+        ++n;
+      }
+    const double det = n * sxx - sx * sx;
+    if (n < 3 || !(det > 0.0))
+      return _load[k];
+    const double a = (n * sxy - sx * sy) / det, b = (sy - a * sx) / n;
+    return a * _delta[k] + b;
+  }
+
   void report()
   {
     // initial stiffness: over 10-50 % of the theory's cracking load;
@@ -506,7 +541,9 @@ private:
     // cracking and first-yield points)
     const double k0 = slope(_delta, _load, 0.1 * _t.p_cracking, 0.5 * _t.p_cracking);
     const auto [p_cr, d_cr] = cracking_point();
-    const double k_cr = _d_yield_model > d_cr && p_cr > 0.0 ? (_p_yield_model - p_cr) / (_d_yield_model - d_cr) : 0.0;
+    // first yield: its deflection, and its load on the fitted line
+    const double p_y = _p_yield_model > 0.0 ? yield_load_fitted() : 0.0;
+    const double k_cr = _d_yield_model > d_cr && p_cr > 0.0 ? (p_y - p_cr) / (_d_yield_model - d_cr) : 0.0;
     // (0 where the bars yield before the concrete cracks: no cracked branch)
     auto secant = [&](bool ts)
     {
@@ -539,11 +576,12 @@ private:
     // the secant from the origin to first yield, P_y / delta_y: the
     // effective stiffness of a cracked member (EI_eff = M_y / phi_y), which
     // needs no cracking point
-    const double k_y = yielded && _d_yield_model > 0.0 ? _p_yield_model / _d_yield_model : 0.0;
+    const double k_y = yielded && _d_yield_model > 0.0 ? p_y / _d_yield_model : 0.0;
     const double k_y_theory = _t.p_yield / _t.deflection(_c, _t.p_yield);
     _out["yield_secant_stiffness_n_m"] = value(k_y, k_y > 0.0);
     _out["yield_secant_stiffness_theory_n_m"] = k_y_theory;
-    _out["yield_load_n"] = value(_p_yield_model, yielded);
+    _out["yield_load_n"] = value(p_y, yielded);
+    _out["yield_load_sample_n"] = value(_p_yield_model, yielded);
     _out["yield_deflection_m"] = value(_d_yield_model, yielded);
     // the theory's first yield at the section where the bars yield, M_y =
     // P (L / 2 - |x|) / 2: the crack that yields first need not be at midspan
@@ -556,8 +594,8 @@ private:
                               {"cracking_load", rel(p_cr, _t.p_cracking, cracked)},
                               {"cracked_stiffness", rel(k_cr, k_cr_theory, both)},
                               {"yield_secant_stiffness", rel(k_y, k_y_theory, k_y > 0.0)},
-                              {"yield_load", rel(_p_yield_model, _t.p_yield, yielded)},
-                              {"yield_load_at_section", rel(_p_yield_model, p_yield_there, inside)}};
+                              {"yield_load", rel(p_y, _t.p_yield, yielded)},
+                              {"yield_load_at_section", rel(p_y, p_yield_there, inside)}};
     _out["bars_yielded"] = yielded;
     _out["peak_load_n"] = _load.empty() ? 0.0 : *std::max_element(_load.begin(), _load.end());
     _out["final_deflection_m"] = deflection();
@@ -582,7 +620,9 @@ private:
          _d_yield_model = 0.0, _x_yield_model = 0.0;
   std::vector<std::int32_t> _left, _right, _plate, _gauge;
   std::unique_ptr<DemSolver> _solver;
-  std::vector<double> _delta, _load;
+  std::vector<double> _delta, _load, _times;
+  std::size_t _yield_sample = 0; ///< the sample at first yield (with _p_yield_model > 0)
+  double _period = 0.0;          ///< the first bending mode's period [s]
   // the cover's strip (cover_strip) and the sample where a crack first cut it
   std::vector<std::int32_t> _strip_local, _strip_links;
   std::vector<double> _strip_x;
