@@ -389,6 +389,28 @@ private:
             {"balance_n", steel + tension + compression},
             {"internal_moment_n_m", moment}};
   }
+  /// Records first yield at this sample: the interval's mean load and the
+  /// supports' reactions, the deflection, where, and the forces across that
+  /// section (with the load's moment there: none outside the span).
+  void first_yield(double load, double left, double right)
+  {
+    _p_yield_model = load;
+    _yield_sample = _load.size(); // the index this sample takes
+    _d_yield_model = deflection();
+    _x_yield_model = yield_section();
+    _yield_forces = section_forces(_x_yield_model);
+    const double arm = 0.5 * _c.span - std::abs(_x_yield_model), m_ext = 0.5 * load * arm;
+    const bool inside = arm > 0.0 && m_ext > 0.0;
+    auto maybe = [](bool ok, double v) { return ok ? nlohmann::json(v) : nlohmann::json(nullptr); };
+    _yield_forces["external_moment_n_m"] = maybe(inside, m_ext);
+    _yield_forces["moment_ratio"] = maybe(inside, _yield_forces["internal_moment_n_m"].get<double>() / m_ext);
+    _yield_forces["left_support_n"] = left;
+    _yield_forces["right_support_n"] = right;
+    _yield_forces["supports_over_load"] = maybe(load > 0.0, (left + right) / load);
+    if (!_c.output_dir.empty())
+      write_bars_at_yield(std::filesystem::path(_c.output_dir) / "bars_first_yield.csv");
+  }
+
   std::size_t broken() const
   {
     return _links.count(LinkState::broken_tension) + _links.count(LinkState::broken_shear);
@@ -442,26 +464,8 @@ private:
         // mean load, so that it does not depend on the progress prints
         const double mean_load = load_sum / static_cast<double>(load_steps);
         if (_p_yield_model == 0.0 && yielded())
-        {
-          _p_yield_model = mean_load;
-          _yield_sample = _load.size(); // the index this sample takes below
-          _d_yield_model = deflection();
-          _x_yield_model = yield_section();
-          _yield_forces = section_forces(_x_yield_model);
-          // the load's moment there, with the interval's mean load (the
-          // forces are the state at the sample); none outside the span
-          const double arm = 0.5 * _c.span - std::abs(_x_yield_model);
-          const double m_ext = 0.5 * mean_load * arm;
-          _yield_forces["external_moment_n_m"] = arm > 0.0 ? nlohmann::json(m_ext) : nlohmann::json(nullptr);
-          _yield_forces["left_support_n"] = left_sum / static_cast<double>(load_steps);
-          _yield_forces["right_support_n"] = right_sum / static_cast<double>(load_steps);
-          _yield_forces["supports_over_load"] = (left_sum + right_sum) / load_sum;
-          _yield_forces["moment_ratio"] = arm > 0.0 && m_ext > 0.0
-                                              ? nlohmann::json(_yield_forces["internal_moment_n_m"].get<double>() / m_ext)
-                                              : nlohmann::json(nullptr);
-          if (!_c.output_dir.empty())
-            write_bars_at_yield(std::filesystem::path(_c.output_dir) / "bars_first_yield.csv");
-        }
+          first_yield(mean_load, left_sum / static_cast<double>(load_steps),
+                      right_sum / static_cast<double>(load_steps));
         _times.push_back(_solver->time());
         _delta.push_back(deflection());
         _load.push_back(mean_load);
