@@ -12,6 +12,7 @@
 #include <random>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <unistd.h>
 
@@ -854,18 +855,19 @@ TEST_CASE("skin compensation: the links of the face spheres stiffened by the bul
   CHECK_THROWS_WITH(compensate_skin(p, l, box, std::nan("")), Contains("skin depth"));
 }
 
-TEST_CASE("neighbour list: rebuilt only after a move of half the skin", "[dem]")
+TEST_CASE("neighbour list: a sphere is searched again after a move of 0.3 skin", "[dem]")
 {
   auto p = lattice(4);
   const Links none; // no links: every near pair is listed
   NeighbourList nl(0.2e-3);
   CHECK(nl.update(p.x, p.r, none));
   const auto pairs = nl.size();
-  p.x[0] += 0.09e-3; // below skin / 2
+  p.x[0] += 0.055e-3; // below 0.3 skin
   CHECK(!nl.update(p.x, p.r, none));
-  p.x[0] += 0.02e-3; // now 0.11e-3 > skin / 2
+  p.x[0] += 0.01e-3; // now 0.065e-3 > 0.3 skin: sphere 0 alone is searched again
   CHECK(nl.update(p.x, p.r, none));
   CHECK(nl.builds() == 2);
+  CHECK(nl.partial_builds() == 1);
   CHECK(nl.size() >= pairs - 10);
   // every pair closer than R_a + R_b + skin is listed
   std::size_t brute = 0;
@@ -875,6 +877,103 @@ TEST_CASE("neighbour list: rebuilt only after a move of half the skin", "[dem]")
                           p.x[3 * j + 2] - p.x[3 * i + 2])
                < p.r[i] + p.r[j] + 0.2e-3;
   CHECK(nl.size() == brute);
+  // more than an eighth of the spheres moved: the whole list is rebuilt
+  for (std::size_t i = 0; i < 9; ++i)
+    p.x[3 * i + 1] += 0.07e-3;
+  CHECK(nl.update(p.x, p.r, none));
+  CHECK(nl.builds() == 3);
+  CHECK(nl.partial_builds() == 1);
+}
+
+TEST_CASE("neighbour list: complete, sorted and keeping contact histories while a few spheres "
+          "wander far",
+          "[dem]")
+{
+  // 216 spheres; ten wander in legs of 20 steps of up to 0.25 skin each,
+  // three others jiggle, so that in 400 steps the wanderers cross cells. After every update each pair
+  // closer than R_a + R_b + 0.1 skin (what the list guarantees, neighbours.h)
+  // that is not joined by an intact link is listed, with its link's index,
+  // the list is sorted without repeats, and a pair's history set before an
+  // update is found after it.
+  auto p = lattice(6);
+  const double skin = 0.2e-3;
+  Material m = concrete();
+  Links l = create_links(p, 1.05, m);
+  REQUIRE(l.size() > 100);
+  for (std::size_t k = 0; k < l.size(); k += 3)
+    l.state[k] = LinkState::broken_tension; // a third broken: their pairs are listed with the link
+  std::map<std::pair<std::int32_t, std::int32_t>, std::int32_t> link_of;
+  for (std::size_t k = 0; k < l.size(); ++k)
+    link_of[{l.a[k], l.b[k]}] = static_cast<std::int32_t>(k);
+  NeighbourList nl(skin);
+  nl.update(p.x, p.r, l);
+  std::mt19937 gen(11);
+  std::uniform_int_distribution<std::size_t> pick(0, p.size() - 1);
+  std::uniform_real_distribution<double> step(-0.25 * skin / std::sqrt(3.0), 0.25 * skin / std::sqrt(3.0));
+  // ten wanderers, each on a straight leg of 20 steps in a random direction
+  const std::vector<std::size_t> wanderers{0, 23, 47, 71, 95, 107, 131, 155, 179, 203};
+  std::vector<double> heading(3 * wanderers.size(), 0.0);
+  std::size_t missing = 0, wrong_link = 0, unsorted = 0, lost_history = 0;
+  for (int s = 0; s < 400; ++s)
+  {
+    // mark every listed pair's history with its (a, b)
+    for (std::size_t q = 0; q < nl.size(); ++q)
+      nl.fs[3 * q] = nl.a[q] * 1000.0 + nl.b[q];
+    const auto a0 = nl.a, b0 = nl.b;
+    if (s % 20 == 0)
+      for (double& v : heading)
+        v = step(gen);
+    for (std::size_t k = 0; k < wanderers.size(); ++k)
+      for (int c = 0; c < 3; ++c)
+        p.x[3 * wanderers[k] + c] += heading[3 * k + c];
+    for (int k = 0; k < 3; ++k) // and a few others jiggle
+    {
+      const std::size_t i = pick(gen);
+      for (int c = 0; c < 3; ++c)
+        p.x[3 * i + c] += step(gen);
+    }
+    nl.update(p.x, p.r, l);
+    for (std::size_t q = 1; q < nl.size(); ++q)
+      unsorted += !(nl.a[q - 1] < nl.a[q] || (nl.a[q - 1] == nl.a[q] && nl.b[q - 1] < nl.b[q]));
+    std::map<std::pair<std::int32_t, std::int32_t>, std::size_t> listed;
+    for (std::size_t q = 0; q < nl.size(); ++q)
+    {
+      listed[{nl.a[q], nl.b[q]}] = q;
+      // new pairs start with no history, the others keep theirs
+      if (nl.fs[3 * q] != 0.0 && nl.fs[3 * q] != nl.a[q] * 1000.0 + nl.b[q])
+        ++lost_history;
+    }
+    for (std::size_t q = 0; q < a0.size(); ++q)
+      if (const auto it = listed.find({a0[q], b0[q]}); it != listed.end())
+        lost_history += nl.fs[3 * it->second] != a0[q] * 1000.0 + b0[q];
+    for (std::int32_t i = 0; i < static_cast<std::int32_t>(p.size()); ++i)
+      for (std::int32_t j = i + 1; j < static_cast<std::int32_t>(p.size()); ++j)
+      {
+        const auto lk = link_of.find({i, j});
+        const std::int32_t k = lk == link_of.end() ? -1 : lk->second;
+        if (k >= 0 && l.state[k] == LinkState::intact)
+          continue;
+        const double d = std::hypot(p.x[3 * j] - p.x[3 * i], p.x[3 * j + 1] - p.x[3 * i + 1],
+                                    p.x[3 * j + 2] - p.x[3 * i + 2]);
+        const auto it = listed.find({i, j});
+        if (d < p.r[i] + p.r[j] + 0.1 * skin && it == listed.end())
+          ++missing;
+        if (it != listed.end() && nl.link[it->second] != k)
+          ++wrong_link;
+      }
+  }
+  CHECK(missing == 0);
+  CHECK(wrong_link == 0);
+  CHECK(unsorted == 0);
+  CHECK(lost_history == 0);
+  CHECK(nl.partial_builds() > 100);
+  // the wanderers went far: some sphere is more than 3 cells from its start
+  const auto start = lattice(6);
+  double farthest = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    farthest = std::max(farthest, std::hypot(p.x[3 * i] - start.x[3 * i], p.x[3 * i + 1] - start.x[3 * i + 1],
+                                             p.x[3 * i + 2] - start.x[3 * i + 2]));
+  CHECK(farthest > 10.0 * skin);
 }
 
 TEST_CASE("threads: the same run bit for bit on 1, 2 and 3 threads, links breaking into "

@@ -550,8 +550,9 @@ void refresh_candidates(const Particles& p, const RigidBody& b, BodyContacts& c,
 {
   // the spheres that may touch the body before the next refresh: those
   // whose centre lies within r + skin of the body's bounding box. Spheres
-  // move less than skin/2 between neighbour-list builds; the body is held
-  // to skin/2 since the last refresh.
+  // move less than nl.drift() (0.6 skin) between changes of the neighbour
+  // list, which refresh the candidates; the body is held to skin/2 since the
+  // last refresh.
   const double skin = nl.skin();
   // the farthest any point of the body may have moved: the centre's move,
   // plus the turn since the refresh (the angle of R R_refresh^T) times the
@@ -587,11 +588,11 @@ void refresh_candidates(const Particles& p, const RigidBody& b, BodyContacts& c,
       c.near.push_back(i);
   };
   // the cells of the neighbour list's grid around the box (its positions
-  // are the last build's: spheres have moved less than skin/2 since), else
-  // every sphere. The box is kept finite (a plane's is unbounded).
+  // are the last change's: spheres have moved less than nl.drift() since),
+  // else every sphere. The box is kept finite (a plane's is unbounded).
   if (const CellGrid* grid = nl.grid())
   {
-    const double half = 0.5 * skin, big = 1e200;
+    const double half = nl.drift(), big = 1e200;
     const double qlo[3] = {std::max(glo[0] - half, -big), std::max(glo[1] - half, -big), std::max(glo[2] - half, -big)};
     const double qhi[3] = {std::min(ghi[0] + half, big), std::min(ghi[1] + half, big), std::min(ghi[2] + half, big)};
     grid->for_each_in_box(qlo, qhi, take);

@@ -1,6 +1,7 @@
 // Energies of the links and contacts: what they store and what softening
 // dissipated (the force loop books breakage and friction as it goes).
 #include "force_loop.h"
+#include "threads.h"
 
 #include <cmath>
 
@@ -10,88 +11,108 @@ using impl::ContactFactors;
 using impl::contact_factors;
 using impl::dot3;
 
+namespace
+{
+/// Energy stored in intact link k: its normal spring from the compaction's
+/// set and its shear spring, times the link's weight.
+double link_energy(const Particles& p, const Links& l, const Material& mat, const LinkLaw& base,
+                   bool compacting, std::size_t k)
+{
+  if (l.state[k] != LinkState::intact)
+    return 0.0;
+  const std::int32_t i = l.a[k], j = l.b[k];
+  double d[3];
+  for (int q = 0; q < 3; ++q)
+    d[q] = p.x[3 * j + q] - p.x[3 * i + q];
+  LinkLaw law = base;
+  law.kn = l.kn[k];
+  law.ks = l.ks[k];
+  law.s_int = link_surface(p, l, k);
+  if (l.strength.size() == l.size() && !l.strength.empty())
+  {
+    law.tensile *= l.strength[k];
+    if (mat.rate_cohesion)
+      law.cohesion *= l.strength[k];
+  }
+  double delta = std::sqrt(dot3(d, d)) - l.d0[k];
+  if (compacting)
+    delta -= compaction_set(l.compaction[k], l.d0[k], mat.compaction); // from the set
+  const double fn = link_normal_force(delta, l.delta_max[k], law).fn;
+  const double wk = l.weight.empty() ? 1.0 : l.weight[k];
+  return wk * (0.5 * fn * delta + 0.5 * dot3(&l.fs[3 * k], &l.fs[3 * k]) / law.ks);
+}
+
+/// Energy stored in touching contact q: the normal overlap's spring and the
+/// shear spring, times the pair's mean weight.
+double contact_energy(const Particles& p, const Links& l, const NeighbourList& nl, const Material& mat,
+                      const ContactFactors& cf, bool compacting, std::size_t q)
+{
+  if (!nl.touching[q])
+    return 0.0;
+  const std::int32_t i = nl.a[q], j = nl.b[q];
+  double d[3];
+  for (int k = 0; k < 3; ++k)
+    d[k] = p.x[3 * j + k] - p.x[3 * i + k];
+  const double rs = p.r[i] + p.r[j];
+  // a broken compacted link's spheres touch from its rest distance (force_loop.cpp)
+  const std::int32_t k = nl.link[q];
+  const double touch = compacting && k >= 0 ? rs + compaction_set(l.compaction[k], l.d0[k], mat.compaction) : rs;
+  const double gap = touch - std::sqrt(dot3(d, d));
+  const double kn = mat.youngs_modulus * interaction_surface(p.r[i], p.r[j]) / rs * cf.cn;
+  const double wq = p.weight.empty() ? 1.0 : 0.5 * (p.weight[i] + p.weight[j]);
+  double e = wq * 0.5 * dot3(&nl.fs[3 * q], &nl.fs[3 * q]) / (kn * cf.cs);
+  if (gap > 0.0)
+    e += wq * 0.5 * kn * gap * gap;
+  return e;
+}
+} // namespace
+
+// The sums run in parallel over fixed blocks (impl::block_sum): the same
+// bit for bit on any thread count, as the step is.
 double elastic_energy(const Particles& p, const Links& l, const NeighbourList& nl,
                       const Material& mat)
 {
-  double e = 0.0;
   const LinkLaw base = mat.law(1.0, 1.0, 1.0);
   // as the force loop decides it
   const bool compacting = mat.compaction.on() && l.compaction.size() == l.size();
-  for (std::size_t k = 0; k < l.size(); ++k)
-  {
-    if (l.state[k] != LinkState::intact)
-      continue;
-    const std::int32_t i = l.a[k], j = l.b[k];
-    double d[3];
-    for (int q = 0; q < 3; ++q)
-      d[q] = p.x[3 * j + q] - p.x[3 * i + q];
-    LinkLaw law = base;
-    law.kn = l.kn[k];
-    law.ks = l.ks[k];
-    law.s_int = link_surface(p, l, k);
-    if (l.strength.size() == l.size() && !l.strength.empty())
-    {
-      law.tensile *= l.strength[k];
-      if (mat.rate_cohesion)
-        law.cohesion *= l.strength[k];
-    }
-    double delta = std::sqrt(dot3(d, d)) - l.d0[k];
-    if (compacting)
-      delta -= compaction_set(l.compaction[k], l.d0[k], mat.compaction); // from the set
-    const double fn = link_normal_force(delta, l.delta_max[k], law).fn;
-    const double wk = l.weight.empty() ? 1.0 : l.weight[k];
-    e += wk * (0.5 * fn * delta + 0.5 * dot3(&l.fs[3 * k], &l.fs[3 * k]) / law.ks);
-  }
+  const double links = impl::block_sum(l.size(), [&](std::size_t k)
+                                       { return link_energy(p, l, mat, base, compacting, k); });
   const ContactFactors cf = contact_factors(mat);
-  for (std::size_t q = 0; q < nl.size(); ++q)
-  {
-    if (!nl.touching[q])
-      continue;
-    const std::int32_t i = nl.a[q], j = nl.b[q];
-    double d[3];
-    for (int k = 0; k < 3; ++k)
-      d[k] = p.x[3 * j + k] - p.x[3 * i + k];
-    const double rs = p.r[i] + p.r[j];
-    // a broken compacted link's spheres touch from its rest distance (force_loop.cpp)
-    const std::int32_t k = nl.link[q];
-    const double touch = compacting && k >= 0 ? rs + compaction_set(l.compaction[k], l.d0[k], mat.compaction) : rs;
-    const double gap = touch - std::sqrt(dot3(d, d));
-    const double kn = mat.youngs_modulus * interaction_surface(p.r[i], p.r[j]) / rs * cf.cn;
-    const double wq = p.weight.empty() ? 1.0 : 0.5 * (p.weight[i] + p.weight[j]);
-    if (gap > 0.0)
-      e += wq * 0.5 * kn * gap * gap;
-    e += wq * 0.5 * dot3(&nl.fs[3 * q], &nl.fs[3 * q]) / (kn * cf.cs);
-  }
-  return e;
+  const double contacts = impl::block_sum(nl.size(), [&](std::size_t q)
+                                          { return contact_energy(p, l, nl, mat, cf, compacting, q); });
+  return links + contacts;
 }
 
 double softening_energy(const Particles& p, const Links& l, const Material& mat)
 {
-  double e = 0.0;
-  LinkLaw law = mat.law(1.0, 1.0, 1.0);
-  for (std::size_t k = 0; k < l.size(); ++k)
-  {
-    if (l.delta_max[k] <= 0.0)
-      continue;
-    law.kn = l.kn[k];
-    law.ks = l.ks[k];
-    law.s_int = link_surface(p, l, k);
-    law.tensile = mat.tensile * (l.strength.size() == l.size() && !l.strength.empty() ? l.strength[k] : 1.0);
-    e += (l.weight.empty() ? 1.0 : l.weight[k]) * softening_dissipation(l.delta_max[k], law);
-  }
-  return e;
+  const LinkLaw base = mat.law(1.0, 1.0, 1.0);
+  const bool rated = l.strength.size() == l.size() && !l.strength.empty();
+  return impl::block_sum(l.size(),
+                         [&](std::size_t k)
+                         {
+                           if (l.delta_max[k] <= 0.0)
+                             return 0.0;
+                           LinkLaw law = base;
+                           law.kn = l.kn[k];
+                           law.ks = l.ks[k];
+                           law.s_int = link_surface(p, l, k);
+                           law.tensile = mat.tensile * (rated ? l.strength[k] : 1.0);
+                           return (l.weight.empty() ? 1.0 : l.weight[k]) * softening_dissipation(l.delta_max[k], law);
+                         });
 }
 
 double compaction_energy(const Links& l, const Material& mat)
 {
-  double e = 0.0;
   if (!(mat.compaction.on() && l.compaction.size() == l.size()))
-    return e;
-  for (std::size_t k = 0; k < l.size(); ++k)
-    if (l.compaction[k] > mat.compaction.onset)
-      e += (l.weight.empty() ? 1.0 : l.weight[k])
-           * compaction_dissipation(l.compaction[k], l.kn[k], l.d0[k], mat.compaction);
-  return e;
+    return 0.0;
+  return impl::block_sum(l.size(),
+                         [&](std::size_t k)
+                         {
+                           if (!(l.compaction[k] > mat.compaction.onset))
+                             return 0.0;
+                           return (l.weight.empty() ? 1.0 : l.weight[k])
+                                  * compaction_dissipation(l.compaction[k], l.kn[k], l.d0[k], mat.compaction);
+                         });
 }
 
 } // namespace dembridge::dem

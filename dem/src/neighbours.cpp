@@ -94,19 +94,132 @@ bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
                            const Links& links, std::span<const std::uint8_t> skip)
 {
   const std::size_t np = r.size();
-  if (_builds > 0 && _x_build.size() == x.size() && !_stale)
+  if (_builds == 0 || _x_build.size() != x.size() || _stale)
   {
-    double max2 = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : max2) num_threads(impl::threads_for(np))
+    build(x, r, links, skip);
+    return true;
+  }
+  // the movers, in increasing order (each thread a contiguous block, the
+  // blocks joined in thread order)
+  const double lim2 = mover_share * mover_share * _skin * _skin;
+  std::vector<std::vector<std::int32_t>> found(omp_get_max_threads());
+#pragma omp parallel num_threads(impl::threads_for(np))
+  {
+    std::vector<std::int32_t>& mine = found[omp_get_thread_num()];
+#pragma omp for schedule(static)
     for (std::size_t i = 0; i < np; ++i)
     {
       const double dx = x[3 * i] - _x_build[3 * i], dy = x[3 * i + 1] - _x_build[3 * i + 1],
                    dz = x[3 * i + 2] - _x_build[3 * i + 2];
-      max2 = std::max(max2, dx * dx + dy * dy + dz * dz);
+      if (dx * dx + dy * dy + dz * dz > lim2 && (skip.empty() || !skip[i]))
+        mine.push_back(static_cast<std::int32_t>(i));
     }
-    if (max2 < 0.25 * _skin * _skin)
-      return false;
   }
+  std::vector<std::int32_t> movers;
+  for (const auto& f : found)
+    movers.insert(movers.end(), f.begin(), f.end());
+  if (movers.empty())
+    return false;
+  if (movers.size() > np / 8)
+    build(x, r, links, skip);
+  else
+    search_movers(x, r, links, movers);
+  return true;
+}
+
+namespace
+{
+/// Index of the link joining a < b (links sorted by (a, b)), or -1.
+std::int32_t find_link(const Links& links, std::int32_t a, std::int32_t b)
+{
+  std::size_t lo = 0, hi = links.size();
+  while (lo < hi)
+  {
+    const std::size_t mid = (lo + hi) / 2;
+    if (links.a[mid] < a || (links.a[mid] == a && links.b[mid] < b))
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo < links.size() && links.a[lo] == a && links.b[lo] == b ? static_cast<std::int32_t>(lo) : -1;
+}
+} // namespace
+
+void NeighbourList::search_movers(std::span<const double> x, std::span<const double> r,
+                                  const Links& links, const std::vector<std::int32_t>& movers)
+{
+  const std::size_t np = r.size();
+  _grid.emplace(x, _cell, _skip);
+  const CellGrid& grid = *_grid;
+  std::vector<std::uint8_t> moving(np, 0);
+  for (auto m : movers)
+    moving[m] = 1;
+  // each mover's pairs with every sphere (a pair of two movers found by the
+  // lower one), as (a, b, link); each thread a contiguous block of movers
+  struct Found
+  {
+    std::vector<std::int32_t> a, b, link;
+  };
+  std::vector<Found> chunk(omp_get_max_threads());
+#pragma omp parallel num_threads(impl::threads_for(movers.size()))
+  {
+    Found& out = chunk[omp_get_thread_num()];
+#pragma omp for schedule(static)
+    for (std::size_t q = 0; q < movers.size(); ++q)
+    {
+      const std::int32_t m = movers[q];
+      grid.for_each_near(&x[3 * m],
+                         [&](std::int32_t j)
+                         {
+                           if (j == m || (moving[j] && j < m))
+                             return;
+                           const double dx = x[3 * j] - x[3 * m], dy = x[3 * j + 1] - x[3 * m + 1],
+                                        dz = x[3 * j + 2] - x[3 * m + 2];
+                           const double lim = r[m] + r[j] + _skin;
+                           if (dx * dx + dy * dy + dz * dz >= lim * lim)
+                             return;
+                           const std::int32_t lo = std::min(m, j), hi = std::max(m, j);
+                           const std::int32_t k = find_link(links, lo, hi);
+                           if (k >= 0 && links.state[k] == LinkState::intact)
+                             return;
+                           out.a.push_back(lo);
+                           out.b.push_back(hi);
+                           out.link.push_back(k);
+                         });
+    }
+  }
+  Found add;
+  for (const auto& f : chunk)
+  {
+    add.a.insert(add.a.end(), f.a.begin(), f.a.end());
+    add.b.insert(add.b.end(), f.b.begin(), f.b.end());
+    add.link.insert(add.link.end(), f.link.begin(), f.link.end());
+  }
+  std::vector<std::size_t> order(add.a.size());
+  for (std::size_t k = 0; k < order.size(); ++k)
+    order[k] = k;
+  std::sort(order.begin(), order.end(), [&](std::size_t u, std::size_t v)
+            { return add.a[u] < add.a[v] || (add.a[u] == add.a[v] && add.b[u] < add.b[v]); });
+  std::vector<std::int32_t> na(order.size()), nb(order.size()), nl(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k)
+  {
+    na[k] = add.a[order[k]];
+    nb[k] = add.b[order[k]];
+    nl[k] = add.link[order[k]];
+  }
+  merge(na, nb, nl, moving);
+  for (auto m : movers)
+    for (int k = 0; k < 3; ++k)
+      _x_build[3 * m + k] = x[3 * m + k];
+  _x_grid.assign(x.begin(), x.end());
+  ++_builds;
+  ++_partial;
+}
+
+void NeighbourList::build(std::span<const double> x, std::span<const double> r, const Links& links,
+                          std::span<const std::uint8_t> skip)
+{
+  const std::size_t np = r.size();
   const double rmax = np ? *std::max_element(r.begin(), r.end()) : 0.0;
   _cell = 2.0 * rmax + _skin;
   _grid.emplace(x, _cell, skip);
@@ -190,8 +303,8 @@ bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
   replace(std::move(na), std::move(nb), std::move(nl), std::move(nfs), std::move(nn),
           std::move(nt));
   _x_build.assign(x.begin(), x.end());
+  _x_grid.assign(x.begin(), x.end());
   ++_builds;
-  return true;
 }
 
 void NeighbourList::replace(std::vector<std::int32_t>&& na, std::vector<std::int32_t>&& nb,
@@ -207,54 +320,80 @@ void NeighbourList::replace(std::vector<std::int32_t>&& na, std::vector<std::int
   ++_version;
 }
 
+void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std::int32_t> nb,
+                          std::span<const std::int32_t> nlink, std::span<const std::uint8_t> moving)
+{
+  // the new pairs (sorted by (a, b)) go in order among the listed ones; a
+  // listed pair of a mover is dropped unless it is among the new ones, and
+  // then keeps its history (a touching pair always is: its gap is below the
+  // skin); a new pair already listed keeps the listed one's history.
+  // Written into arrays of the final size: no growth in the step loop.
+  auto drops = [&](std::size_t q) { return !moving.empty() && (moving[a[q]] || moving[b[q]]); };
+  auto before = [&](std::size_t q, std::size_t p) { return a[q] < na[p] || (a[q] == na[p] && b[q] < nb[p]); };
+  auto same = [&](std::size_t q, std::size_t p) { return a[q] == na[p] && b[q] == nb[p]; };
+  std::size_t total = 0;
+  for (std::size_t q = 0, p = 0; q < a.size() || p < na.size();)
+    if (p == na.size() || (q < a.size() && before(q, p)))
+      total += !drops(q++);
+    else
+    {
+      q += q < a.size() && same(q, p);
+      ++p;
+      ++total;
+    }
+  std::vector<std::int32_t> oa(total), ob(total), ol(total);
+  std::vector<double> ofs(3 * total, 0.0), on(3 * total, 0.0);
+  std::vector<std::uint8_t> ot(total, 0);
+  auto copy_old = [&](std::size_t q, std::size_t o, std::int32_t link_index)
+  {
+    oa[o] = a[q];
+    ob[o] = b[q];
+    ol[o] = link_index;
+    std::copy_n(&fs[3 * q], 3, &ofs[3 * o]);
+    std::copy_n(&n[3 * q], 3, &on[3 * o]);
+    ot[o] = touching[q];
+  };
+  std::size_t o = 0;
+  for (std::size_t q = 0, p = 0; q < a.size() || p < na.size();)
+  {
+    if (p == na.size() || (q < a.size() && before(q, p)))
+    {
+      if (!drops(q))
+        copy_old(q, o++, link[q]);
+      ++q;
+      continue;
+    }
+    if (q < a.size() && same(q, p))
+      copy_old(q++, o, nlink[p]);
+    else
+    {
+      oa[o] = na[p];
+      ob[o] = nb[p];
+      ol[o] = nlink[p];
+    }
+    ++o;
+    ++p;
+  }
+  replace(std::move(oa), std::move(ob), std::move(ol), std::move(ofs), std::move(on), std::move(ot));
+}
+
 void NeighbourList::add_broken_links(const Links& links, std::span<const std::int32_t> ids)
 {
   if (ids.empty())
     return;
-  const std::size_t m = a.size() + ids.size();
-  std::vector<std::int32_t> na, nb, nl;
-  std::vector<double> nfs, nn;
-  std::vector<std::uint8_t> nt;
-  na.reserve(m);
-  nb.reserve(m);
-  nl.reserve(m);
-  nfs.reserve(3 * m);
-  nn.reserve(3 * m);
-  nt.reserve(m);
-  auto keep = [&](std::size_t q)
+  std::vector<std::int32_t> na(ids.size()), nb(ids.size());
+  for (std::size_t k = 0; k < ids.size(); ++k)
   {
-    na.push_back(a[q]);
-    nb.push_back(b[q]);
-    nl.push_back(link[q]);
-    nfs.insert(nfs.end(), &fs[3 * q], &fs[3 * q] + 3);
-    nn.insert(nn.end(), &n[3 * q], &n[3 * q] + 3);
-    nt.push_back(touching[q]);
-  };
-  std::size_t q = 0;
-  for (const std::int32_t k : ids)
-  {
-    const std::int32_t ka = links.a[k], kb = links.b[k];
-    while (q < a.size() && (a[q] < ka || (a[q] == ka && b[q] < kb)))
-      keep(q++);
-    if (q < a.size() && a[q] == ka && b[q] == kb)
-      continue; // already listed
-    na.push_back(ka);
-    nb.push_back(kb);
-    nl.push_back(k);
-    nfs.insert(nfs.end(), 3, 0.0);
-    nn.insert(nn.end(), 3, 0.0);
-    nt.push_back(0);
+    na[k] = links.a[ids[k]];
+    nb[k] = links.b[ids[k]];
   }
-  while (q < a.size())
-    keep(q++);
-  replace(std::move(na), std::move(nb), std::move(nl), std::move(nfs), std::move(nn),
-          std::move(nt));
+  merge(na, nb, ids, {});
 }
 
 std::size_t NeighbourList::bytes() const
 {
   return (a.capacity() + b.capacity() + link.capacity()) * sizeof(std::int32_t)
-         + (fs.capacity() + n.capacity() + _x_build.capacity()) * sizeof(double)
+         + (fs.capacity() + n.capacity() + _x_build.capacity() + _x_grid.capacity()) * sizeof(double)
          + touching.capacity() + (_grid ? _grid->bytes() : 0);
 }
 

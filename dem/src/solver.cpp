@@ -562,10 +562,12 @@ void DemSolver::set_energy_guard(double margin, std::int64_t every)
 DemEnergy DemSolver::energy() const
 {
   DemEnergy e = _e;
-  e.kinetic = 0.0;
-  for (std::size_t i = 0; i < _p.size(); ++i)
-    e.kinetic += 0.5 * _p.m[i] * dot3(&_p.v[3 * i], &_p.v[3 * i])
-                 + 0.5 * _p.inertia[i] * dot3(&_p.w[3 * i], &_p.w[3 * i]);
+  e.kinetic = impl::block_sum(_p.size(),
+                              [&](std::size_t i)
+                              {
+                                return 0.5 * _p.m[i] * dot3(&_p.v[3 * i], &_p.v[3 * i])
+                                       + 0.5 * _p.inertia[i] * dot3(&_p.w[3 * i], &_p.w[3 * i]);
+                              });
   e.elastic = elastic_energy(_p, _l, _nl, _mat);
   e.softening = softening_energy(_p, _l, _mat);
   e.compaction = compaction_energy(_l, _mat);

@@ -105,7 +105,9 @@ void NeighbourList::save(const Group& g) const
   g.write("n", n);
   g.write("touching", touching);
   g.write("x_build", _x_build);
+  g.write("x_grid", _x_grid);
   g.write_int("builds", static_cast<std::int64_t>(_builds));
+  g.write_int("partial_builds", static_cast<std::int64_t>(_partial));
   g.write_int("version", static_cast<std::int64_t>(_version));
   g.write("skin", _skin);
   g.write("cell", _cell);
@@ -127,14 +129,20 @@ void NeighbourList::load(const Group& g)
   const std::size_t m = a.size();
   if (b.size() != m || link.size() != m || fs.size() != 3 * m || n.size() != 3 * m || touching.size() != m)
     g.fail("a", "the pair arrays have inconsistent lengths (file damaged?)");
+  // (a checkpoint written before partial updates: its grid was made from x_build)
+  if (g.has("x_grid"))
+    g.read("x_grid", _x_grid);
+  else
+    _x_grid = _x_build;
   _builds = static_cast<std::size_t>(g.read_int("builds"));
+  _partial = g.has("partial_builds") ? static_cast<std::size_t>(g.read_int("partial_builds")) : 0;
   _version = static_cast<std::size_t>(g.read_int("version"));
   _cell = g.read_double("cell");
   g.read("skip", _skip);
   _stale = g.read_int("stale") != 0;
-  // the grid of the last build, from its positions (the constructor is deterministic)
+  // the grid of the last change, from its positions (the constructor is deterministic)
   if (_builds > 0)
-    _grid.emplace(_x_build, _cell, _skip);
+    _grid.emplace(_x_grid, _cell, _skip);
   else
     _grid.reset();
 }

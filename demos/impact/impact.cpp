@@ -336,7 +336,7 @@ private:
     if (_s.reinforcement.any())
       _solver->add_bars(_bars);
     _solver->start();
-    _history_every = run.history_every > 0 ? run.history_every : std::max<std::int64_t>(1, _crossing_steps / 1000);
+    _history_every = run.history_every > 0 ? run.history_every : std::max<std::int64_t>(1, _crossing_steps / 250);
   }
 
   void set_up_supports()
@@ -617,6 +617,7 @@ private:
     _out["seconds_per_link_step"] = link_steps > 0 ? wall / link_steps : 0.0;
     _out["seconds_per_particle_step"] = wall / (static_cast<double>(_p.size()) * std::max<std::int64_t>(1, _solver->steps()));
     _out["neighbour_rebuilds"] = _solver->neighbours().builds();
+    _out["neighbour_partial_rebuilds"] = _solver->neighbours().partial_builds();
     if (_s.reinforcement.any())
       report_bars();
   }

@@ -2,8 +2,9 @@
 /// @file neighbours.h
 /// Cell-list neighbour search with a skin (a service the force loop asks for).
 /// Pairs (a < b, sorted) whose gap is below the skin carry a contact history
-/// (shear force) that survives rebuilds. The list is rebuilt only when a
-/// sphere has moved more than half the skin since the last build.
+/// (shear force) that survives rebuilds. A sphere that has moved more than
+/// 0.3 skin since it was last searched is searched again (its pairs are
+/// replaced); the whole list is rebuilt when many have.
 
 #include "dembridge/dem/assembly.h"
 #include "dembridge/core/checkpoint.h"
@@ -111,12 +112,24 @@ public:
   /// @param skin extra search distance beyond contact [m], > 0
   explicit NeighbourList(double skin);
 
-  /// Rebuilds if a sphere moved more than skin/2 since the last build (or
-  /// never built). Returns true if it rebuilt. Pairs joined by an intact link
-  /// are left out (the link acts there); a pair whose link is broken is
-  /// listed, with its link index, like any other.
+  /// Brings the list up to date: the spheres that moved more than
+  /// `mover_share` x skin since they were last searched (the movers) are
+  /// searched again, their pairs replaced; the whole list is rebuilt on the
+  /// first call, after invalidate(), or when the movers are more than an
+  /// eighth of the spheres. Returns true if the list changed.
+  ///
+  /// Why it stays complete: a pair left out had a gap of at least a skin
+  /// when the later of its two spheres was searched. Since then that sphere
+  /// has moved at most 0.3 skin and the other at most 0.6 (0.3 from where it
+  /// was searched, to then and to now), so the gap is still 0.1 skin.
+  ///
+  /// Pairs joined by an intact link are left out (the link acts there); a
+  /// pair whose link is broken is listed, with its link index, like any
+  /// other.
   bool update(std::span<const double> x, std::span<const double> r, const Links& links,
               std::span<const std::uint8_t> skip = {});
+  /// How far a sphere searched again moves from where it was searched [skin].
+  static constexpr double mover_share = 0.3;
   /// The next update() rebuilds (spheres were removed from the computation).
   void invalidate() { _stale = true; }
 
@@ -130,9 +143,14 @@ public:
   /// Changes whenever the list of pairs changes (rebuild or added pairs).
   std::size_t version() const { return _version; }
   double skin() const { return _skin; }
-  /// The cell grid of the last build (null before the first), over the
-  /// positions of that build; spheres have moved less than skin/2 since.
+  /// The cell grid of the last change (null before the first), over the
+  /// positions then; spheres have moved less than drift() since.
   const CellGrid* grid() const { return _grid ? &*_grid : nullptr; }
+  /// The most a sphere moves from where grid() has it, or between two
+  /// changes of the list [m]: twice mover_share x skin.
+  double drift() const { return 2.0 * mover_share * _skin; }
+  /// The searches of movers alone (builds() counts every change).
+  std::size_t partial_builds() const { return _partial; }
   /// Bytes held by the list.
   std::size_t bytes() const;
   /// The pairs, their contact history and the build state, to a checkpoint.
@@ -150,9 +168,16 @@ private:
   void replace(std::vector<std::int32_t>&& na, std::vector<std::int32_t>&& nb,
                std::vector<std::int32_t>&& nl, std::vector<double>&& nfs, std::vector<double>&& nn,
                std::vector<std::uint8_t>&& nt);
+  void build(std::span<const double> x, std::span<const double> r, const Links& links,
+             std::span<const std::uint8_t> skip);
+  void search_movers(std::span<const double> x, std::span<const double> r, const Links& links,
+                     const std::vector<std::int32_t>& movers);
+  void merge(std::span<const std::int32_t> na, std::span<const std::int32_t> nb,
+             std::span<const std::int32_t> nlink, std::span<const std::uint8_t> moving);
   double _skin;
-  std::size_t _builds = 0, _version = 0;
-  std::vector<double> _x_build;
+  std::size_t _builds = 0, _version = 0, _partial = 0;
+  std::vector<double> _x_build;    // where each sphere was last searched
+  std::vector<double> _x_grid;     // the positions the grid was made from
   double _cell = 0.0;              // the grid's cell size at the last build
   bool _stale = false;             // rebuild at the next update
   std::vector<std::uint8_t> _skip; // the spheres left out of the last build
