@@ -890,11 +890,13 @@ TEST_CASE("neighbour list: complete, sorted and keeping contact histories while 
           "[dem]")
 {
   // 216 spheres; ten wander in legs of 20 steps of up to 0.25 skin each,
-  // three others jiggle, so that in 400 steps the wanderers cross cells. After every update each pair
-  // closer than R_a + R_b + 0.1 skin (what the list guarantees, neighbours.h)
-  // that is not joined by an intact link is listed, with its link's index,
-  // the list is sorted without repeats, and a pair's history set before an
-  // update is found after it.
+  // three others jiggle, so that in 400 steps the wanderers cross cells.
+  // After every update each pair closer than R_a + R_b + 0.1 skin (what the
+  // list guarantees, neighbours.h) that is not joined by an intact link is
+  // listed, with its link's index; no listed pair is joined by an intact
+  // link or farther than R_a + R_b + 1.9 skin; the list is sorted without
+  // repeats; and a pair's history (shear force, normal, touching) set
+  // before an update is found after it.
   auto p = lattice(6);
   const double skin = 0.2e-3;
   Material m = concrete();
@@ -913,12 +915,16 @@ TEST_CASE("neighbour list: complete, sorted and keeping contact histories while 
   // ten wanderers, each on a straight leg of 20 steps in a random direction
   const std::vector<std::size_t> wanderers{0, 23, 47, 71, 95, 107, 131, 155, 179, 203};
   std::vector<double> heading(3 * wanderers.size(), 0.0);
-  std::size_t missing = 0, wrong_link = 0, unsorted = 0, lost_history = 0;
+  std::size_t missing = 0, wrong_link = 0, unsorted = 0, lost_history = 0, intact_listed = 0, stale = 0;
   for (int s = 0; s < 400; ++s)
   {
-    // mark every listed pair's history with its (a, b)
+    // mark every listed pair's history (shear force, normal, touching) with its (a, b)
     for (std::size_t q = 0; q < nl.size(); ++q)
+    {
       nl.fs[3 * q] = nl.a[q] * 1000.0 + nl.b[q];
+      nl.n[3 * q + 1] = -nl.fs[3 * q];
+      nl.touching[q] = (nl.a[q] + nl.b[q]) % 2;
+    }
     const auto a0 = nl.a, b0 = nl.b;
     if (s % 20 == 0)
       for (double& v : heading)
@@ -945,29 +951,43 @@ TEST_CASE("neighbour list: complete, sorted and keeping contact histories while 
     }
     for (std::size_t q = 0; q < a0.size(); ++q)
       if (const auto it = listed.find({a0[q], b0[q]}); it != listed.end())
-        lost_history += nl.fs[3 * it->second] != a0[q] * 1000.0 + b0[q];
+      {
+        const std::size_t h = it->second;
+        lost_history += nl.fs[3 * h] != a0[q] * 1000.0 + b0[q] || nl.n[3 * h + 1] != -nl.fs[3 * h]
+                        || nl.touching[h] != (a0[q] + b0[q]) % 2;
+      }
     for (std::int32_t i = 0; i < static_cast<std::int32_t>(p.size()); ++i)
       for (std::int32_t j = i + 1; j < static_cast<std::int32_t>(p.size()); ++j)
       {
         const auto lk = link_of.find({i, j});
         const std::int32_t k = lk == link_of.end() ? -1 : lk->second;
+        const auto it = listed.find({i, j});
         if (k >= 0 && l.state[k] == LinkState::intact)
+        {
+          intact_listed += it != listed.end();
           continue;
+        }
         const double d = std::hypot(p.x[3 * j] - p.x[3 * i], p.x[3 * j + 1] - p.x[3 * i + 1],
                                     p.x[3 * j + 2] - p.x[3 * i + 2]);
-        const auto it = listed.find({i, j});
         if (d < p.r[i] + p.r[j] + 0.1 * skin && it == listed.end())
           ++missing;
+        // a listed pair was within a skin when last searched; its spheres
+        // have moved 0.9 skin at most since
+        if (it != listed.end() && d > p.r[i] + p.r[j] + 1.9 * skin)
+          ++stale;
         if (it != listed.end() && nl.link[it->second] != k)
           ++wrong_link;
       }
   }
   CHECK(missing == 0);
+  CHECK(stale == 0);
+  CHECK(intact_listed == 0);
   CHECK(wrong_link == 0);
   CHECK(unsorted == 0);
   CHECK(lost_history == 0);
   CHECK(nl.partial_builds() > 100);
-  // the wanderers went far: some sphere is more than 3 cells from its start
+  // the wanderers went far: some sphere is more than ten skins (about a
+  // cell) from its start
   const auto start = lattice(6);
   double farthest = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i)

@@ -140,6 +140,8 @@ void NeighbourList::load(const Group& g)
   _cell = g.read_double("cell");
   g.read("skip", _skip);
   _stale = g.read_int("stale") != 0;
+  if (_x_grid.size() != _x_build.size() || (!_skip.empty() && 3 * _skip.size() != _x_build.size()))
+    g.fail("x_grid", "the positions and the skipped spheres have inconsistent lengths (file damaged?)");
   // the grid of the last change, from its positions (the constructor is deterministic)
   if (_builds > 0)
     _grid.emplace(_x_grid, _cell, _skip);

@@ -491,8 +491,8 @@ RunSpec read_run(Reader& r)
   s.domain_margin = r.number("domain_margin_m", s.domain_margin, Allowed::positive(100.0).or_value(0.0, "the thickness"),
                              "spheres farther than this from the slab are removed (fragments) [m]");
   s.skin = r.number("neighbour_skin_m", s.skin, Allowed::positive(1.0).or_value(0.0, "half the smallest radius"),
-                    "neighbour-list skin: pairs closer than contact + skin are listed, the list rebuilt when a "
-                    "sphere has moved skin / 2 [m]");
+                    "neighbour-list skin: pairs closer than contact + skin are listed, a sphere searched again "
+                    "once it has moved 0.3 skin [m]");
   return s;
 }
 

@@ -152,11 +152,12 @@ SurfaceMesh body_surface(const Shape& s, int rings = 24, int segments = 32);
 std::pair<std::array<double, 3>, std::array<double, 3>> bounding_box(const RigidBody& b);
 
 /// Refreshes c.near, the spheres within r_max + 2 skin of the body's
-/// bounding box, when the neighbour list has been rebuilt or any point of the
+/// bounding box, when the neighbour list has changed or any point of the
 /// body may have moved more than skin/2 since the last refresh (its centre's
-/// move plus its turn times its length). A sphere stays within skin/2 of its
-/// position at the last build, hence within a skin of where it was at the
-/// refresh: no other sphere can reach the body before the next refresh.
+/// move plus its turn times its length). Between two changes of the list a
+/// sphere moves less than nl.drift() (0.6 skin), hence less than a skin from
+/// where it was at the refresh: no other sphere can reach the body before
+/// the next refresh.
 void refresh_candidates(const Particles& p, const RigidBody& b, BodyContacts& c, const NeighbourList& nl);
 
 /// Adds the contact forces of body b on the spheres (p.f, p.t) and sets the
