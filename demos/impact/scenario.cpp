@@ -486,7 +486,7 @@ RunSpec read_run(Reader& r)
   s.damping = r.number("damping_1_s", s.damping, Allowed::non_negative(1e9), "velocity-proportional damping [1/s]");
   s.frames = static_cast<int>(r.integer("frames", s.frames, Allowed::closed(1, 100000), "XDMF frames over the crossing time (the same pace after it)"));
   s.history_every = static_cast<int>(r.integer("history_every", s.history_every,
-                                               Allowed::closed(1, 1e9).or_value(0, "1000 rows over the crossing time"),
+                                               Allowed::closed(1, 1e9).or_value(0, "250 rows over the crossing time"),
                                                "steps between rows of history.csv"));
   s.domain_margin = r.number("domain_margin_m", s.domain_margin, Allowed::positive(100.0).or_value(0.0, "the thickness"),
                              "spheres farther than this from the slab are removed (fragments) [m]");
