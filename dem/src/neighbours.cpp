@@ -129,6 +129,37 @@ bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
 
 namespace
 {
+/// Pairs (a, b, link) found by one thread.
+struct Found
+{
+  std::vector<std::int32_t> a, b, link;
+  void push(std::int32_t i, std::int32_t j, std::int32_t k)
+  {
+    a.push_back(i);
+    b.push_back(j);
+    link.push_back(k);
+  }
+};
+
+/// The threads' pairs joined in thread order.
+Found joined(const std::vector<Found>& chunks)
+{
+  Found all;
+  std::size_t total = 0;
+  for (const auto& f : chunks)
+    total += f.a.size();
+  all.a.reserve(total);
+  all.b.reserve(total);
+  all.link.reserve(total);
+  for (const auto& f : chunks)
+  {
+    all.a.insert(all.a.end(), f.a.begin(), f.a.end());
+    all.b.insert(all.b.end(), f.b.begin(), f.b.end());
+    all.link.insert(all.link.end(), f.link.begin(), f.link.end());
+  }
+  return all;
+}
+
 /// Index of the link joining a < b (links sorted by (a, b)), or -1.
 std::int32_t find_link(const Links& links, std::int32_t a, std::int32_t b)
 {
@@ -156,10 +187,6 @@ void NeighbourList::search_movers(std::span<const double> x, std::span<const dou
     moving[m] = 1;
   // each mover's pairs with every sphere (a pair of two movers found by the
   // lower one), as (a, b, link); each thread a contiguous block of movers
-  struct Found
-  {
-    std::vector<std::int32_t> a, b, link;
-  };
   std::vector<Found> chunk(omp_get_max_threads());
 #pragma omp parallel num_threads(impl::threads_for(movers.size()))
   {
@@ -182,32 +209,21 @@ void NeighbourList::search_movers(std::span<const double> x, std::span<const dou
                            const std::int32_t k = find_link(links, lo, hi);
                            if (k >= 0 && links.state[k] == LinkState::intact)
                              return;
-                           out.a.push_back(lo);
-                           out.b.push_back(hi);
-                           out.link.push_back(k);
+                           out.push(lo, hi, k);
                          });
     }
   }
-  Found add;
-  for (const auto& f : chunk)
-  {
-    add.a.insert(add.a.end(), f.a.begin(), f.a.end());
-    add.b.insert(add.b.end(), f.b.begin(), f.b.end());
-    add.link.insert(add.link.end(), f.link.begin(), f.link.end());
-  }
+  // sorted by (a, b), as merge() takes them
+  const Found add = joined(chunk);
   std::vector<std::size_t> order(add.a.size());
   for (std::size_t k = 0; k < order.size(); ++k)
     order[k] = k;
   std::sort(order.begin(), order.end(), [&](std::size_t u, std::size_t v)
             { return add.a[u] < add.a[v] || (add.a[u] == add.a[v] && add.b[u] < add.b[v]); });
-  std::vector<std::int32_t> na(order.size()), nb(order.size()), nl(order.size());
-  for (std::size_t k = 0; k < order.size(); ++k)
-  {
-    na[k] = add.a[order[k]];
-    nb[k] = add.b[order[k]];
-    nl[k] = add.link[order[k]];
-  }
-  merge(na, nb, nl, moving);
+  Found sorted;
+  for (const std::size_t k : order)
+    sorted.push(add.a[k], add.b[k], add.link[k]);
+  merge(sorted.a, sorted.b, sorted.link, moving, false);
   for (auto m : movers)
     for (int k = 0; k < 3; ++k)
       _x_build[3 * m + k] = x[3 * m + k];
@@ -230,10 +246,6 @@ void NeighbourList::build(std::span<const double> x, std::span<const double> r, 
   const std::vector<std::int32_t> first = impl::first_by_a(np, links.a, links.b, "neighbour list: links");
   // each thread searches a contiguous block of spheres (static schedule), so
   // the blocks joined in thread order give the same list for any thread count
-  struct Found
-  {
-    std::vector<std::int32_t> a, b, link;
-  };
   std::vector<Found> chunk;
 #pragma omp parallel num_threads(impl::threads_for(np))
   {
@@ -263,45 +275,13 @@ void NeighbourList::build(std::span<const double> x, std::span<const double> r, 
         const bool linked = k < first[i + 1] && links.b[k] == j;
         if (linked && links.state[k] == LinkState::intact)
           continue;
-        out.a.push_back(static_cast<std::int32_t>(i));
-        out.b.push_back(j);
-        out.link.push_back(linked ? k : -1);
+        out.push(static_cast<std::int32_t>(i), j, linked ? k : -1);
       }
     }
   }
-  std::size_t total = 0;
-  for (const auto& f : chunk)
-    total += f.a.size();
-  std::vector<std::int32_t> na, nb, nl;
-  na.reserve(total);
-  nb.reserve(total);
-  nl.reserve(total);
-  for (const auto& f : chunk)
-  {
-    na.insert(na.end(), f.a.begin(), f.a.end());
-    nb.insert(nb.end(), f.b.begin(), f.b.end());
-    nl.insert(nl.end(), f.link.begin(), f.link.end());
-  }
-  // carry the contact history over (both lists sorted by (a, b))
-  std::vector<double> nfs(3 * na.size(), 0.0), nn(3 * na.size(), 0.0);
-  std::vector<std::uint8_t> nt(na.size(), 0);
-  std::size_t q = 0;
-  for (std::size_t p = 0; p < na.size(); ++p)
-  {
-    while (q < a.size() && (a[q] < na[p] || (a[q] == na[p] && b[q] < nb[p])))
-      ++q;
-    if (q < a.size() && a[q] == na[p] && b[q] == nb[p])
-    {
-      for (int k = 0; k < 3; ++k)
-      {
-        nfs[3 * p + k] = fs[3 * q + k];
-        nn[3 * p + k] = n[3 * q + k];
-      }
-      nt[p] = touching[q];
-    }
-  }
-  replace(std::move(na), std::move(nb), std::move(nl), std::move(nfs), std::move(nn),
-          std::move(nt));
+  // the new list, with the history of the pairs listed before
+  const Found all = joined(chunk);
+  merge(all.a, all.b, all.link, {}, true);
   _x_build.assign(x.begin(), x.end());
   _x_grid.assign(x.begin(), x.end());
   ++_builds;
@@ -321,26 +301,19 @@ void NeighbourList::replace(std::vector<std::int32_t>&& na, std::vector<std::int
 }
 
 void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std::int32_t> nb,
-                          std::span<const std::int32_t> nlink, std::span<const std::uint8_t> moving)
+                          std::span<const std::int32_t> nlink, std::span<const std::uint8_t> moving,
+                          bool replace_all)
 {
   // the new pairs (sorted by (a, b)) go in order among the listed ones; a
-  // listed pair of a mover is dropped unless it is among the new ones, and
-  // then keeps its history (a touching pair always is: its gap is below the
-  // skin); a new pair already listed keeps the listed one's history.
-  // Written into arrays of the final size: no growth in the step loop.
-  auto drops = [&](std::size_t q) { return !moving.empty() && (moving[a[q]] || moving[b[q]]); };
+  // listed pair of a mover (of any sphere with replace_all) is dropped
+  // unless it is among the new ones, and then keeps its history (a touching
+  // pair always is: its gap is below the skin); a new pair already listed
+  // keeps the listed one's history. Written into arrays of the largest size
+  // the list can have, then cut: no growth in the step loop.
+  auto drops = [&](std::size_t q) { return replace_all || (!moving.empty() && (moving[a[q]] || moving[b[q]])); };
   auto before = [&](std::size_t q, std::size_t p) { return a[q] < na[p] || (a[q] == na[p] && b[q] < nb[p]); };
   auto same = [&](std::size_t q, std::size_t p) { return a[q] == na[p] && b[q] == nb[p]; };
-  std::size_t total = 0;
-  for (std::size_t q = 0, p = 0; q < a.size() || p < na.size();)
-    if (p == na.size() || (q < a.size() && before(q, p)))
-      total += !drops(q++);
-    else
-    {
-      q += q < a.size() && same(q, p);
-      ++p;
-      ++total;
-    }
+  const std::size_t total = (replace_all ? 0 : a.size()) + na.size(); // at most; cut to size below
   std::vector<std::int32_t> oa(total), ob(total), ol(total);
   std::vector<double> ofs(3 * total, 0.0), on(3 * total, 0.0);
   std::vector<std::uint8_t> ot(total, 0);
@@ -374,6 +347,12 @@ void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std:
     ++o;
     ++p;
   }
+  oa.resize(o);
+  ob.resize(o);
+  ol.resize(o);
+  ofs.resize(3 * o);
+  on.resize(3 * o);
+  ot.resize(o);
   replace(std::move(oa), std::move(ob), std::move(ol), std::move(ofs), std::move(on), std::move(ot));
 }
 
@@ -387,7 +366,7 @@ void NeighbourList::add_broken_links(const Links& links, std::span<const std::in
     na[k] = links.a[ids[k]];
     nb[k] = links.b[ids[k]];
   }
-  merge(na, nb, ids, {});
+  merge(na, nb, ids, {}, false);
 }
 
 std::size_t NeighbourList::bytes() const

@@ -79,25 +79,34 @@ double BeamTheory::deflection(const BeamConfig& c, double P, bool tension_stiffe
 
 namespace
 {
+/// Least-squares line y = a x + b through the points added.
+struct LineFit
+{
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  int n = 0;
+  void add(double x, double y)
+  {
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+    ++n;
+  }
+  double det() const { return n * sxx - sx * sx; }
+  double slope() const { return (n * sxy - sx * sy) / det(); }
+  double intercept() const { return (sy - slope() * sx) / n; }
+};
+
 /// Least-squares slope of y against x over the points with lo <= y <= hi
 /// before y first exceeds hi (the loading branch, not the points where the
 /// load falls back into the window after a crack).
 double slope(const std::vector<double>& x, const std::vector<double>& y, double lo, double hi)
 {
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  int n = 0;
+  LineFit fit;
   for (std::size_t k = 0; k < x.size() && y[k] <= hi; ++k)
     if (y[k] >= lo)
-    {
-      sx += x[k];
-      sy += y[k];
-      sxx += x[k] * x[k];
-      sxy += x[k] * y[k];
-      ++n;
-    }
-  if (n < 3)
-    return 0.0;
-  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+      fit.add(x[k], y[k]);
+  return fit.n < 3 ? 0.0 : fit.slope();
 }
 
 class BeamRun
@@ -520,25 +529,15 @@ private:
   double yield_load_fitted() const
   {
     const std::size_t k = _yield_sample;
-    const double x0 = _delta[k]; // deflections counted from it (conditioning)
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    int n = 0;
-    for (std::size_t j = 0; j < _load.size(); ++j)
-      if (std::abs(_times[j] - _times[k]) <= 0.5 * _period
-          && (_cut_sample < 0 || static_cast<std::int64_t>(j) > _cut_sample || _cut_sample >= static_cast<std::int64_t>(k)))
-      {
-        const double x = _delta[j] - x0;
-        sx += x;
-        sy += _load[j];
-        sxx += x * x;
-        sxy += x * _load[j];
-        ++n;
-      }
-    const double det = n * sxx - sx * sx;
-    if (n < 3 || !(det > 1e-12 * n * sxx))
+    // the samples after the cover's cut, if it came before first yield
+    const std::size_t first = _cut_sample >= 0 && static_cast<std::size_t>(_cut_sample) < k ? _cut_sample + 1 : 0;
+    LineFit fit; // deflections counted from first yield's (conditioning)
+    for (std::size_t j = first; j < _load.size(); ++j)
+      if (std::abs(_times[j] - _times[k]) <= 0.5 * _period)
+        fit.add(_delta[j] - _delta[k], _load[j]);
+    if (fit.n < 3 || !(fit.det() > 1e-12 * fit.n * fit.sxx))
       return _load[k];
-    const double a = (n * sxy - sx * sy) / det, b = (sy - a * sx) / n;
-    return b; // at x = 0: the first yield's deflection
+    return fit.intercept(); // at first yield's deflection
   }
 
   void report()

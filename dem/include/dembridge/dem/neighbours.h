@@ -173,7 +173,7 @@ private:
   void search_movers(std::span<const double> x, std::span<const double> r, const Links& links,
                      const std::vector<std::int32_t>& movers);
   void merge(std::span<const std::int32_t> na, std::span<const std::int32_t> nb,
-             std::span<const std::int32_t> nlink, std::span<const std::uint8_t> moving);
+             std::span<const std::int32_t> nlink, std::span<const std::uint8_t> moving, bool replace_all);
   double _skin;
   std::size_t _builds = 0, _version = 0, _partial = 0;
   std::vector<double> _x_build;    // where each sphere was last searched
