@@ -173,6 +173,86 @@ TEST_CASE("packing: any region from a signed distance (a sphere)", "[dem][packin
   CHECK(worst(p, g).second <= 1e-3 * *std::min_element(p.r.begin(), p.r.end()));
 }
 
+TEST_CASE("packing: graded by a size scale (finer spheres in part of the region)", "[dem][packing]")
+{
+  // a 0.1 x 0.05 x 0.05 m box: scale 0.5 for x < 0.04 m, growing linearly to
+  // 1 at x = 0.06 m; mean radius 3 mm where the scale is 1
+  const auto g = box_region({0, 0, 0}, {0.1, 0.05, 0.05});
+  PackingOptions o;
+  o.mean_radius = 0.003;
+  o.size_scale = [](const Point& x) { return 0.5 + 0.5 * std::clamp((x[0] - 0.04) / 0.02, 0.0, 1.0); };
+  const Packing p = generate_packing(g, o);
+  const double rmin_fine = 0.5 * 2.0 * 0.003 / 3.0;
+  INFO(p.size() << " spheres, " << p.sweeps << " sweeps, " << p.backoffs << " backoffs");
+  const auto [ov, pen] = worst(p, g);
+  CHECK(ov <= 1e-3 * rmin_fine);
+  CHECK(pen <= 1e-3 * rmin_fine);
+  // mean radius on either side of the ramp: the radii are drawn from the
+  // same [Rmin, Rmax] on both sides, so the fine side's is half the coarse
+  // side's, and the coarse side's the 3 mm asked. Bounds: 3 %, three
+  // standard errors of the coarse side's mean (~400 draws, uniform on
+  // [2, 4] mm: 0.58 mm / sqrt(400) = 0.029 mm, 1 % of 3 mm) plus the
+  // packing's final shrink (at most 2 % of Rmin)
+  double sum[2] = {0, 0};
+  int n[2] = {0, 0};
+  for (std::size_t i = 0; i < p.size(); ++i)
+  {
+    const double x = p.x[3 * i];
+    if (x < 0.035 || x > 0.065)
+    {
+      sum[x > 0.05] += p.r[i];
+      ++n[x > 0.05];
+    }
+  }
+  const double fine = sum[0] / n[0], coarse = sum[1] / n[1];
+  INFO("mean radius " << fine << " m (" << n[0] << " spheres) and " << coarse << " m (" << n[1] << ")");
+  CHECK(std::abs(coarse / 0.003 - 1.0) < 0.03);
+  CHECK(std::abs(fine / coarse - 0.5) < 0.5 * 0.03);
+  // the same solid fraction on both sides, as dense as a uniform packing's
+  // bulk (>= 0.60, the first test), boxes 2 Rmax clear of the walls
+  const double f_fine = packing_fraction(p, box_region({0.004, 0.004, 0.004}, {0.036, 0.046, 0.046}), 0.0, 400000);
+  const double f_coarse = packing_fraction(p, box_region({0.064, 0.008, 0.008}, {0.092, 0.042, 0.042}), 0.0, 400000);
+  INFO("solid fraction " << f_fine << " (fine) and " << f_coarse << " (coarse)");
+  CHECK(f_fine >= 0.60);
+  CHECK(f_coarse >= 0.60);
+  CHECK(std::abs(f_fine - f_coarse) < 0.02);
+  // links per sphere do not depend on the scale (the packing looks the same
+  // at either scale): each side's bulk within 10 % of the whole bulk's 12
+  const double lambda = lambda_for_bulk_links(g, p.x, p.r, 12.0);
+  auto parts = make_particles(p.x, p.r, 2400.0, 0.6);
+  auto links = create_links(parts, lambda, Material{});
+  std::vector<int> count(p.size(), 0);
+  for (std::size_t k = 0; k < links.size(); ++k)
+  {
+    ++count[links.a[k]];
+    ++count[links.b[k]];
+  }
+  double c[2] = {0, 0};
+  int m[2] = {0, 0};
+  for (std::size_t i = 0; i < p.size(); ++i)
+  {
+    const double* x = &p.x[3 * i];
+    const double wall = 2.0 * (4.0 / 3.0 * 0.003) * (x[0] < 0.05 ? 0.5 : 1.0); // 2 Rmax of its side
+    const bool inner = x[1] > wall && x[1] < 0.05 - wall && x[2] > wall && x[2] < 0.05 - wall;
+    if (inner && (x[0] > wall && x[0] < 0.035))
+    {
+      c[0] += count[i];
+      ++m[0];
+    }
+    else if (inner && x[0] > 0.065 && x[0] < 0.1 - wall)
+    {
+      c[1] += count[i];
+      ++m[1];
+    }
+  }
+  INFO("links per sphere " << c[0] / m[0] << " (fine) and " << c[1] / m[1] << " (coarse), lambda " << lambda);
+  CHECK(std::abs(c[0] / m[0] / 12.0 - 1.0) < 0.1);
+  CHECK(std::abs(c[1] / m[1] / 12.0 - 1.0) < 0.1);
+  // a scale outside (0, 1] is an error naming it
+  o.size_scale = [](const Point&) { return 1.5; };
+  CHECK_THROWS_WITH(generate_packing(g, o), Contains("size scale") && Contains("(0, 1]"));
+}
+
 TEST_CASE("packing files: round trip and malformed lines", "[dem][packing][errors]")
 {
   const auto dir = std::filesystem::temp_directory_path() / "dembridge_packing";

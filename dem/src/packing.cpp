@@ -291,6 +291,60 @@ void morton_sort(Packing& p, const Region& g)
   p.x = std::move(x);
   p.r = std::move(r);
 }
+/// A size scale's value at x, checked to lie in (0, 1].
+double checked_scale(const std::function<double(const Point&)>& scale, const Point& x)
+{
+  const double v = scale(x);
+  if (!(v > 0.0 && v <= 1.0))
+    impl::out_of_range("packing size scale at (" + std::to_string(x[0]) + ", " + std::to_string(x[1]) + ", "
+                           + std::to_string(x[2]) + ") m",
+                       v, "in (0, 1]");
+  return v;
+}
+
+/// What a graded packing needs of its scale field: the region's volume
+/// weighted by scale^-3, and the smallest scale in it.
+struct Graded
+{
+  double weighted, smallest;
+};
+
+/// Graded for a region and a size scale, from the cell centres of a 128^3
+/// grid over its bounding box (as the volume of sdf_region), summed slab by
+/// slab in order (the same on any thread count).
+Graded graded_volume(const Region& g, const std::function<double(const Point&)>& scale)
+{
+  constexpr int m = 128;
+  double h[3];
+  for (int k = 0; k < 3; ++k)
+    h[k] = (g.hi[k] - g.lo[k]) / m;
+  std::vector<double> slab(m, 0.0), low(m, 1.0);
+  std::vector<std::size_t> inside_count(m, 0);
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j)
+      for (int k = 0; k < m; ++k)
+      {
+        const Point x{g.lo[0] + (i + 0.5) * h[0], g.lo[1] + (j + 0.5) * h[1], g.lo[2] + (k + 0.5) * h[2]};
+        if (g.sdf(x) >= 0.0)
+          continue;
+        const double v = checked_scale(scale, x);
+        slab[i] += 1.0 / (v * v * v);
+        low[i] = std::min(low[i], v);
+        ++inside_count[i];
+      }
+  double sum = 0.0, smallest = 1.0;
+  std::size_t count = 0;
+  for (int i = 0; i < m; ++i)
+  {
+    sum += slab[i];
+    smallest = std::min(smallest, low[i]);
+    count += inside_count[i];
+  }
+  if (count == 0)
+    return {g.volume, 1.0};
+  // the region's own volume times the mean of scale^-3 over its samples
+  return {g.volume * sum / count, smallest};
+}
 } // namespace
 
 std::size_t fill_boundary(Packing& p, const Region& region, double rmin, double rmax)
@@ -386,11 +440,14 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
   const double q = o.radius_ratio;
   // E[r^3] for r uniform in [a, q a], per a^3
   const double er3 = q > 1.0 ? (std::pow(q, 4) - 1.0) / (4.0 * (q - 1.0)) : 1.0;
+  // graded: the region's volume weighted by scale^-3 (what sets the count)
+  const bool graded = static_cast<bool>(o.size_scale);
+  const Graded grade = graded ? graded_volume(g, o.size_scale) : Graded{g.volume, 1.0};
   std::size_t n = o.count;
   if (n == 0)
   {
     const double a = 2.0 * o.mean_radius / (1.0 + q);
-    n = static_cast<std::size_t>(std::llround(o.target_fraction * g.volume
+    n = static_cast<std::size_t>(std::llround(o.target_fraction * grade.weighted
                                               / (4.0 / 3.0 * std::numbers::pi * er3 * a * a * a)));
   }
   if (n < 2)
@@ -399,23 +456,33 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   Packing p;
   p.r.resize(n);
-  double vol = 0.0;
   for (auto& r : p.r)
-  {
     r = 1.0 + (q - 1.0) * u01(gen);
-    vol += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-  }
-  const double scale = std::cbrt(o.target_fraction * g.volume / vol);
-  for (auto& r : p.r)
-    r *= scale;
-  const double rmin = scale;
-  const double tol = o.tolerance * rmin;
+  // the radii scaled to the target fraction (after the start, if graded:
+  // each radius times the scale where its sphere starts); rmin: the smallest
+  // radius a draw can give, rmin_unit: the same where the scale is 1
+  double rmin = 0.0, rmin_unit = 0.0;
+  auto fit_radii = [&]()
+  {
+    double vol = 0.0;
+    for (const double r : p.r)
+      vol += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    const double scale = std::cbrt(o.target_fraction * g.volume / vol);
+    for (auto& r : p.r)
+      r *= scale;
+    rmin_unit = scale;
+    rmin = scale * grade.smallest;
+  };
+  if (!graded)
+    fit_radii();
   const double s0 = 0.8;
   // Stratified start: one sphere per cell of a grid over the bounding box
   // (cells whose centre lies inside, chosen at random), jittered within it.
+  // Graded: the grid is that of the smallest scale, a cell kept with the
+  // probability (smallest / scale)^3 at its centre.
   p.x.resize(3 * n);
   {
-    double c = std::cbrt(g.volume / n);
+    double c = grade.smallest * std::cbrt(grade.weighted / n);
     std::vector<Point> cells;
     for (int attempt = 0; attempt < 50; ++attempt)
     {
@@ -432,7 +499,8 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
           {
             const Point centre{g.lo[0] + (i + 0.5) * h3[0], g.lo[1] + (j + 0.5) * h3[1],
                                g.lo[2] + (k + 0.5) * h3[2]};
-            if (g.sdf(centre) < 0.0)
+            if (g.sdf(centre) < 0.0
+                && (!graded || u01(gen) < std::pow(grade.smallest / o.size_scale(centre), 3)))
               cells.push_back(centre);
           }
       if (cells.size() >= n)
@@ -448,9 +516,16 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
     for (std::size_t i = 0; i < n; ++i)
       for (int k = 0; k < 3; ++k)
         p.x[3 * i + k] = cells[i][k] + 0.5 * c * (2.0 * u01(gen) - 1.0);
+    if (graded)
+    {
+      for (std::size_t i = 0; i < n; ++i)
+        p.r[i] *= checked_scale(o.size_scale, {p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2]});
+      fit_radii();
+    }
     // memory order along a Morton curve from the start (radii are i.i.d.)
     morton_sort(p, g);
   }
+  const double tol = o.tolerance * rmin;
   // Relaxation by FIRE (Bitzek et al. 2006) on the overlap energy, with each
   // sphere's Jacobi displacement d (its share of the overlaps it is in,
   // weighted by the other's volume, plus the boundary push) as the force:
@@ -660,7 +735,9 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
           ++p.shrunk;
         }
       p.max_overlap = p.max_penetration = 0.0;
-      const double r_lo = rmin * std::pow(backoff, p.backoffs);
+      // (graded: the spheres added are those of scale 1, so a face is
+      // filled where it is left wider than the largest of them allow)
+      const double r_lo = rmin_unit * std::pow(backoff, p.backoffs);
       p.filled = fill_uncovered(p, g, r_lo, q * r_lo, h);
       morton_sort(p, g);
       return p;

@@ -148,14 +148,7 @@ private:
       _pk = read_target_packing(region);
     else
     {
-      PackingOptions po;
-      po.mean_radius = t.mean_radius;
-      po.radius_ratio = t.radius_ratio;
-      po.seed = t.seed;
-      if (!_cfg.quiet)
-        std::cout << "packing the slab (" << fmt(region.volume) << " m^3, mean radius " << t.mean_radius << " m)..."
-                  << std::endl;
-      _pk = generate_packing(region, po);
+      _pk = pack(region);
       if (_s.reinforcement.any())
         line_the_bars(region);
     }
@@ -197,6 +190,27 @@ private:
       ++_initial_links[_links.a[k]];
       ++_initial_links[_links.b[k]];
     }
+  }
+
+  /// The slab's packing, graded along the projectile's path if the
+  /// scenario asks for finer spheres there (fine_scale).
+  Packing pack(const Region& region) const
+  {
+    const TargetSpec& t = _s.target;
+    PackingOptions po;
+    po.mean_radius = t.mean_radius;
+    po.radius_ratio = t.radius_ratio;
+    po.seed = t.seed;
+    if (t.fine())
+      po.size_scale = fine_scale(_s);
+    if (!_cfg.quiet)
+    {
+      std::cout << "packing the slab (" << fmt(region.volume) << " m^3, mean radius " << t.mean_radius << " m";
+      if (t.fine())
+        std::cout << ", " << t.fine_mean() << " m within " << t.fine_radius << " m of the path";
+      std::cout << ")..." << std::endl;
+    }
+    return generate_packing(region, po);
   }
 
   /// The bars of the scenario (make_bars), their elements at most
@@ -358,6 +372,26 @@ private:
     _solver->add_motion({"supports", std::move(ids), MotionKind::fixed, {true, true, true}, {}});
   }
 
+  /// The mean radius of the spheres the projectile meets: with finer
+  /// spheres along its path, those within target.fine_radius_m of it; else
+  /// all.
+  double path_mean_radius() const
+  {
+    if (!_s.target.fine())
+      return mean(_p.r);
+    const auto scale = fine_scale(_s);
+    const double fine = _s.target.fine_mean() / _s.target.mean_radius;
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < _p.size(); ++i)
+      if (scale({_p.x[3 * i], _p.x[3 * i + 1], _p.x[3 * i + 2]}) <= fine)
+      {
+        sum += _p.r[i];
+        ++n;
+      }
+    return n > 0 ? sum / static_cast<double>(n) : mean(_p.r);
+  }
+
   void describe()
   {
     _out["scenario"] = _s.name;
@@ -372,7 +406,10 @@ private:
     _out["duration_s"] = _duration;
     _out["projectile_mass_kg"] = _body.mass;
     _out["striking_velocity_m_s"] = _s.projectile.velocity;
-    _out["spheres_across_diameter"] = _s.projectile.diameter / (2.0 * mean(_p.r));
+    const double path_radius = path_mean_radius();
+    if (_s.target.fine())
+      _out["fine_mean_radius_m"] = path_radius;
+    _out["spheres_across_diameter"] = _s.projectile.diameter / (2.0 * path_radius);
     if (_s.reinforcement.any())
     {
       double mass = 0.0;

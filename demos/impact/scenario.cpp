@@ -5,9 +5,11 @@
 
 #include "dembridge/dem/material_file.h"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <map>
+#include <numbers>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -397,6 +399,15 @@ TargetSpec read_target(Reader& r)
                       "within support_width_m of its edges; none: free");
   t.support_width = r.number("support_width_m", t.support_width, Allowed::positive(10.0).or_value(0.0, "2 Rmax"),
                              "width of the band held [m]");
+  t.fine_radius = r.number("fine_radius_m", t.fine_radius, Allowed::positive(100.0).or_value(0.0, "none"),
+                           "finer spheres within this distance of the projectile's path, through the whole "
+                           "thickness (docs/impact.md) [m]");
+  t.fine_mean_radius = r.number("fine_mean_radius_m", t.fine_mean_radius,
+                                Allowed::positive(1.0).or_value(0.0, "mean_radius_m / 2"),
+                                "mean radius of the finer spheres (below mean_radius_m) [m]");
+  t.fine_transition = r.number("fine_transition_m", t.fine_transition,
+                               Allowed::positive(100.0).or_value(0.0, "4 mean_radius_m"),
+                               "beyond fine_radius_m, the width over which the radii grow to mean_radius_m [m]");
   return t;
 }
 
@@ -558,7 +569,35 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
     throw std::runtime_error("scenario " + file.string() + ": reinforcement.bar_diameter_m = 0: give the bars' "
                              "diameter (> 0 m) with layers or bars_m");
   bar_lines(s); // the layout's own checks
+  const TargetSpec& t = s.target;
+  if (t.fine())
+  {
+    const std::string at = "scenario " + file.string() + ": target.";
+    if (!(t.fine_mean() < t.mean_radius))
+      throw std::runtime_error(at + "fine_mean_radius_m = " + number_text(t.fine_mean()) + ": allowed below "
+                               "target.mean_radius_m (" + number_text(t.mean_radius) + " m)");
+    if (!t.packing_file.empty())
+      throw std::runtime_error(at + "fine_radius_m = " + number_text(t.fine_radius) + " with a packing_file: "
+                               "the file's spheres are used as they are; give one or the other");
+  }
   return s;
+}
+
+std::function<double(const dem::Point&)> fine_scale(const Scenario& s)
+{
+  const TargetSpec& t = s.target;
+  const ProjectileSpec& q = s.projectile;
+  const double th = q.obliquity_deg * std::numbers::pi / 180.0;
+  const std::array<double, 3> dir{std::sin(th), 0.0, -std::cos(th)}, aim{q.aim[0], q.aim[1], 0.0};
+  const double R = t.fine_radius, w = t.transition(), fine = t.fine_mean() / t.mean_radius;
+  return [=](const dem::Point& x)
+  {
+    const double v[3] = {x[0] - aim[0], x[1] - aim[1], x[2] - aim[2]};
+    const double a = v[0] * dir[0] + v[1] * dir[1] + v[2] * dir[2];
+    const double u[3] = {v[0] - a * dir[0], v[1] - a * dir[1], v[2] - a * dir[2]};
+    const double d = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    return fine + (1.0 - fine) * std::clamp((d - R) / w, 0.0, 1.0);
+  };
 }
 
 std::vector<dem::BarLine> bar_lines(const Scenario& s)

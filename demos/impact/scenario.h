@@ -10,9 +10,11 @@
 
 #include "dembridge/dem/assembly.h"
 #include "dembridge/dem/bars.h"
+#include "dembridge/dem/packing.h"
 
 #include <array>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -43,6 +45,13 @@ struct TargetSpec
   std::string packing_file;             ///< "" = generate
   std::string supports = "sides";       ///< sides (lateral faces held) | rear-edges | none
   double support_width = 0.0;           ///< band held [m]; 0 = 2 Rmax
+  /// finer spheres within this distance of the projectile's path [m]; 0 = none
+  double fine_radius = 0.0;
+  double fine_mean_radius = 0.0;        ///< their mean radius [m]; 0 = mean_radius / 2
+  double fine_transition = 0.0;         ///< width over which the radii grow to mean_radius [m]; 0 = 4 mean_radius
+  bool fine() const { return fine_radius > 0.0; }
+  double fine_mean() const { return fine_mean_radius > 0.0 ? fine_mean_radius : 0.5 * mean_radius; }
+  double transition() const { return fine_transition > 0.0 ? fine_transition : 4.0 * mean_radius; }
 };
 
 /// Reinforcement: mats of bars along x and y through the thickness, and/or
@@ -116,6 +125,12 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
 ///   mats that do not fit in the thickness, a spacing not above the
 ///   diameter, a polyline with no part inside the slab.
 std::vector<dem::BarLine> bar_lines(const Scenario& s);
+
+/// The radius scale of the slab's packing at a point (PackingOptions::
+/// size_scale) with target.fine_radius_m: fine_mean_radius_m / mean_radius_m
+/// within fine_radius_m of the projectile's path (the line through aim_m at
+/// the obliquity), growing linearly to 1 over fine_transition_m beyond.
+std::function<double(const dem::Point&)> fine_scale(const Scenario& s);
 
 /// The scenario keys with their meaning, unit and default, one per line
 /// (`impact --keys`; docs/impact.md lists the same).

@@ -76,6 +76,12 @@ struct PackingOptions
   /// 0.05: the slow end of the settling saved, radii of the spheres
   /// concerned reduced by at most ~3 % of Rmin.
   double shrink_below = 0.05;
+  /// Graded packings: the radius scale at a point, in (0, 1]. A sphere's
+  /// radius is its draw from [Rmin, Rmax] times the scale where it starts,
+  /// and the spheres start with a density proportional to scale^-3, so the
+  /// solid fraction is the same everywhere. mean_radius is the mean where the
+  /// scale is 1. Empty: 1 everywhere (a uniform packing).
+  std::function<double(const Point&)> size_scale;
   bool verbose = false;
 };
 
@@ -104,8 +110,9 @@ struct Packing
 std::size_t fill_boundary(Packing& p, const Region& region, double rmin, double rmax);
 
 /// Generates a packing. @throws std::runtime_error on bad options (radius
-/// ratio outside [1, 3], radius <= 0, fraction outside (0, 0.74)) or if it
-/// does not converge in max_sweeps (the message gives the overlap reached).
+/// ratio outside [1, 3], radius <= 0, fraction outside (0, 0.74), a size
+/// scale outside (0, 1]) or if it does not converge in max_sweeps (the
+/// message gives the overlap reached).
 Packing generate_packing(const Region& region, const PackingOptions& opt);
 
 /// Solid fraction inside the region shrunk by `margin` [m] (sdf < -margin),
