@@ -2,7 +2,7 @@
 # Installs missing Debian packages, builds the main demo and runs it: a
 # rigid ogive projectile perforating a slab of discrete-element concrete at
 # 400 m/s (the shipped scenario `small`, at 1 mm mean sphere radius: 25,000
-# spheres, about a minute on 2 cores).
+# spheres, about half a minute on 2 cores).
 # Idempotent: a second call rebuilds nothing and only reruns the demo.
 # Extra arguments go to the demo (e.g. --set projectile.velocity_m_s=600).
 set -eu

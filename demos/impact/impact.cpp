@@ -583,6 +583,7 @@ private:
     const std::int64_t frame_every = std::max<std::int64_t>(1, _crossing_steps / _s.run.frames);
     Stopwatch clock;
     double last_print = -1e9;
+    bool framed = false; // a frame written at the last step
     _outcome = outcome();
     while (_outcome == Outcome::running)
     {
@@ -596,7 +597,8 @@ private:
       _outcome = outcome();
       if (s % _history_every == 0)
         write_row();
-      if (_writer && s >= (_next_frame + 1) * frame_every)
+      framed = _writer && s >= (_next_frame + 1) * frame_every;
+      if (framed)
       {
         write_frame();
         ++_next_frame;
@@ -617,7 +619,8 @@ private:
       write_row();
     if (_writer)
     {
-      write_frame();
+      if (!framed) // (a frame of the last step already written: not twice at one time)
+        write_frame();
       _writer->close();
       if (_bar_writer)
         _bar_writer->close();
