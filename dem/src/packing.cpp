@@ -442,7 +442,7 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
   const double er3 = q > 1.0 ? (std::pow(q, 4) - 1.0) / (4.0 * (q - 1.0)) : 1.0;
   // graded: the region's volume weighted by scale^-3 (what sets the count)
   const bool graded = static_cast<bool>(o.size_scale);
-  const Graded grade = graded ? graded_volume(g, o.size_scale) : Graded{g.volume, 1.0};
+  Graded grade = graded ? graded_volume(g, o.size_scale) : Graded{g.volume, 1.0};
   std::size_t n = o.count;
   if (n == 0)
   {
@@ -500,7 +500,7 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
             const Point centre{g.lo[0] + (i + 0.5) * h3[0], g.lo[1] + (j + 0.5) * h3[1],
                                g.lo[2] + (k + 0.5) * h3[2]};
             if (g.sdf(centre) < 0.0
-                && (!graded || u01(gen) < std::pow(grade.smallest / o.size_scale(centre), 3)))
+                && (!graded || u01(gen) < std::pow(grade.smallest / checked_scale(o.size_scale, centre), 3)))
               cells.push_back(centre);
           }
       if (cells.size() >= n)
@@ -518,8 +518,14 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
         p.x[3 * i + k] = cells[i][k] + 0.5 * c * (2.0 * u01(gen) - 1.0);
     if (graded)
     {
+      // (the smallest scale a sphere got: below the grid's if the finest
+      // part is thinner than the grid's spacing)
       for (std::size_t i = 0; i < n; ++i)
-        p.r[i] *= checked_scale(o.size_scale, {p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2]});
+      {
+        const double si = checked_scale(o.size_scale, {p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2]});
+        p.r[i] *= si;
+        grade.smallest = std::min(grade.smallest, si);
+      }
       fit_radii();
     }
     // memory order along a Morton curve from the start (radii are i.i.d.)

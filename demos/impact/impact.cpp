@@ -11,6 +11,7 @@
 #include <iomanip>
 #include <iostream>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -372,13 +373,12 @@ private:
     _solver->add_motion({"supports", std::move(ids), MotionKind::fixed, {true, true, true}, {}});
   }
 
-  /// The mean radius of the spheres the projectile meets: with finer
-  /// spheres along its path, those within target.fine_radius_m of it; else
-  /// all.
-  double path_mean_radius() const
+  /// With finer spheres along the path, the mean radius of those centred
+  /// within target.fine_radius_m of it (none: nullopt, as without them).
+  std::optional<double> fine_mean_radius() const
   {
     if (!_s.target.fine())
-      return mean(_p.r);
+      return std::nullopt;
     const auto scale = fine_scale(_s);
     const double fine = _s.target.fine_mean() / _s.target.mean_radius;
     double sum = 0.0;
@@ -389,7 +389,9 @@ private:
         sum += _p.r[i];
         ++n;
       }
-    return n > 0 ? sum / static_cast<double>(n) : mean(_p.r);
+    if (n == 0)
+      return std::nullopt;
+    return sum / static_cast<double>(n);
   }
 
   void describe()
@@ -406,10 +408,15 @@ private:
     _out["duration_s"] = _duration;
     _out["projectile_mass_kg"] = _body.mass;
     _out["striking_velocity_m_s"] = _s.projectile.velocity;
-    const double path_radius = path_mean_radius();
-    if (_s.target.fine())
-      _out["fine_mean_radius_m"] = path_radius;
-    _out["spheres_across_diameter"] = _s.projectile.diameter / (2.0 * path_radius);
+    const auto fine = fine_mean_radius();
+    if (fine)
+      _out["fine_mean_radius_m"] = *fine;
+    else if (_s.target.fine())
+      std::cerr << "warning: no sphere centre lies within target.fine_radius_m (" << _s.target.fine_radius
+                << " m) of the path: fine_mean_radius_m is left out, spheres_across_diameter counts all the "
+                   "spheres"
+                << std::endl;
+    _out["spheres_across_diameter"] = _s.projectile.diameter / (2.0 * fine.value_or(mean(_p.r)));
     if (_s.reinforcement.any())
     {
       double mass = 0.0;
@@ -583,7 +590,6 @@ private:
     const std::int64_t frame_every = std::max<std::int64_t>(1, _crossing_steps / _s.run.frames);
     Stopwatch clock;
     double last_print = -1e9;
-    bool framed = false; // a frame written at the last step
     _outcome = outcome();
     while (_outcome == Outcome::running)
     {
@@ -597,8 +603,7 @@ private:
       _outcome = outcome();
       if (s % _history_every == 0)
         write_row();
-      framed = _writer && s >= (_next_frame + 1) * frame_every;
-      if (framed)
+      if (_writer && s >= (_next_frame + 1) * frame_every)
       {
         write_frame();
         ++_next_frame;
@@ -619,7 +624,9 @@ private:
       write_row();
     if (_writer)
     {
-      if (!framed) // (a frame of the last step already written: not twice at one time)
+      // (frames fall on the steps _next_frame x frame_every, the first at
+      // step 0: the last step's frame, if it had one, is not written twice)
+      if (_solver->steps() != _next_frame * frame_every)
         write_frame();
       _writer->close();
       if (_bar_writer)
