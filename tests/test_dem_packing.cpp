@@ -217,7 +217,9 @@ TEST_CASE("packing: graded by a size scale (finer spheres in part of the region)
   CHECK(f_coarse >= 0.60);
   CHECK(std::abs(f_fine - f_coarse) < 0.02);
   // links per sphere do not depend on the scale (the packing looks the same
-  // at either scale): each side's bulk within 10 % of the whole bulk's 12
+  // at either scale): each side's bulk within 5 % of the whole bulk's 12 (a
+  // sphere's count scatters by about 2, so the coarse side's mean over ~150
+  // bulk spheres has a standard error of 0.16, 1.4 %: 5 % is 3.5 of them)
   const double lambda = lambda_for_bulk_links(g, p.x, p.r, 12.0);
   auto parts = make_particles(p.x, p.r, 2400.0, 0.6);
   auto links = create_links(parts, lambda, Material{});
@@ -246,8 +248,8 @@ TEST_CASE("packing: graded by a size scale (finer spheres in part of the region)
     }
   }
   INFO("links per sphere " << c[0] / m[0] << " (fine) and " << c[1] / m[1] << " (coarse), lambda " << lambda);
-  CHECK(std::abs(c[0] / m[0] / 12.0 - 1.0) < 0.1);
-  CHECK(std::abs(c[1] / m[1] / 12.0 - 1.0) < 0.1);
+  CHECK(std::abs(c[0] / m[0] / 12.0 - 1.0) < 0.05);
+  CHECK(std::abs(c[1] / m[1] / 12.0 - 1.0) < 0.05);
   // a scale outside (0, 1] is an error naming it
   o.size_scale = [](const Point&) { return 1.5; };
   CHECK_THROWS_WITH(generate_packing(g, o), Contains("size scale") && Contains("(0, 1]"));

@@ -310,16 +310,16 @@ struct Graded
 };
 
 /// Graded for a region and a size scale, from the cell centres of a 128^3
-/// grid over its bounding box (as the volume of sdf_region), summed slab by
-/// slab in order (the same on any thread count).
+/// grid over its bounding box (as the volume of sdf_region), in one serial
+/// pass (the scale may throw: checked_scale).
 Graded graded_volume(const Region& g, const std::function<double(const Point&)>& scale)
 {
   constexpr int m = 128;
   double h[3];
   for (int k = 0; k < 3; ++k)
     h[k] = (g.hi[k] - g.lo[k]) / m;
-  std::vector<double> slab(m, 0.0), low(m, 1.0);
-  std::vector<std::size_t> inside_count(m, 0);
+  double sum = 0.0, smallest = 1.0;
+  std::size_t count = 0;
   for (int i = 0; i < m; ++i)
     for (int j = 0; j < m; ++j)
       for (int k = 0; k < m; ++k)
@@ -328,18 +328,10 @@ Graded graded_volume(const Region& g, const std::function<double(const Point&)>&
         if (g.sdf(x) >= 0.0)
           continue;
         const double v = checked_scale(scale, x);
-        slab[i] += 1.0 / (v * v * v);
-        low[i] = std::min(low[i], v);
-        ++inside_count[i];
+        sum += 1.0 / (v * v * v);
+        smallest = std::min(smallest, v);
+        ++count;
       }
-  double sum = 0.0, smallest = 1.0;
-  std::size_t count = 0;
-  for (int i = 0; i < m; ++i)
-  {
-    sum += slab[i];
-    smallest = std::min(smallest, low[i]);
-    count += inside_count[i];
-  }
   if (count == 0)
     return {g.volume, 1.0};
   // the region's own volume times the mean of scale^-3 over its samples

@@ -302,8 +302,7 @@ private:
       throw std::runtime_error(std::string("projectile: ") + e.what() + " (projectile.length_m, diameter_m, crh, "
                                "cone_angle_deg)");
     }
-    const double th = q.obliquity_deg * std::numbers::pi / 180.0;
-    _dir = {std::sin(th), 0.0, -std::cos(th)};
+    _dir = path_direction(q);
     const V3 aim{q.aim[0], q.aim[1], 0.0};
     const V3 tip{aim[0] - q.standoff * _dir[0], aim[1], aim[2] - q.standoff * _dir[2]};
     const double density = q.mass > 0.0 ? q.mass / sh.volume() : q.density;

@@ -583,12 +583,17 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
   return s;
 }
 
+std::array<double, 3> path_direction(const ProjectileSpec& q)
+{
+  const double th = q.obliquity_deg * std::numbers::pi / 180.0;
+  return {std::sin(th), 0.0, -std::cos(th)};
+}
+
 std::function<double(const dem::Point&)> fine_scale(const Scenario& s)
 {
   const TargetSpec& t = s.target;
   const ProjectileSpec& q = s.projectile;
-  const double th = q.obliquity_deg * std::numbers::pi / 180.0;
-  const std::array<double, 3> dir{std::sin(th), 0.0, -std::cos(th)}, aim{q.aim[0], q.aim[1], 0.0};
+  const std::array<double, 3> dir = path_direction(q), aim{q.aim[0], q.aim[1], 0.0};
   const double R = t.fine_radius, w = t.transition(), fine = t.fine_mean() / t.mean_radius;
   return [=](const dem::Point& x)
   {

@@ -93,7 +93,7 @@ struct RunSpec
   double safety = 0.8;         ///< fraction of the critical step [-] (validation.md 7b.1)
   double damping = 0.0;        ///< velocity-proportional damping [1/s]
   int frames = 40;             ///< XDMF frames over the crossing time
-  int history_every = 0;       ///< steps between history rows; 0 = 1000 over the crossing time
+  int history_every = 0;       ///< steps between history rows; 0 = 250 over the crossing time
   double domain_margin = 0.0;  ///< the domain: the slab grown by this [m]; 0 = its thickness
   double skin = 0.0;           ///< neighbour-list skin [m]; 0 = half the smallest radius
 };
@@ -125,6 +125,10 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
 ///   mats that do not fit in the thickness, a spacing not above the
 ///   diameter, a polyline with no part inside the slab.
 std::vector<dem::BarLine> bar_lines(const Scenario& s);
+
+/// The unit vector of the projectile's path: along -z tilted by the
+/// obliquity towards +x.
+std::array<double, 3> path_direction(const ProjectileSpec& q);
 
 /// The radius scale of the slab's packing at a point (PackingOptions::
 /// size_scale) with target.fine_radius_m: fine_mean_radius_m / mean_radius_m
