@@ -470,6 +470,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     s.broken_ids.push_back(k);
   }
   nl.add_broken_links(l, s.broken_ids);
+  const double contacts_start = omp_get_wtime();
   if (s.pairs_version != nl.version() || s.pairs.first.size() != np + 1 || s.pairs.threads != nt)
   {
     s.pairs.build(np, nl.a, nl.b, nt);
@@ -555,6 +556,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   // friction, summed in pair order
   for (std::size_t q = 0; q < s.pair_slip.size(); ++q)
     c.friction += s.pair_slip[q];
+  c.contact_seconds += omp_get_wtime() - contacts_start;
 }
 
 } // namespace dembridge::dem

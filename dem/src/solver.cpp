@@ -465,6 +465,7 @@ void DemSolver::end_step()
   const double t1 = omp_get_wtime();
   _nl.update(_p.x, _p.r, _l, _removed);
   const double t2 = omp_get_wtime();
+  const double contacts_before = _counters.contact_seconds;
   compute_forces(_p, _l, _nl, _mat, dt, _counters, *_scratch);
   const double t25 = omp_get_wtime();
   contact_bodies(dt);
@@ -486,6 +487,7 @@ void DemSolver::end_step()
   const double t4 = omp_get_wtime();
   _time.neighbours += t2 - t1;
   _time.forces += t25 - t2;
+  _time.contacts += _counters.contact_seconds - contacts_before;
   _time.bodies += t3 - t25;
   _time.bars += t4 - t3;
   const double w_presc = held_reactions() + bar_reactions();

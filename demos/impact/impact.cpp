@@ -656,7 +656,8 @@ private:
     _out["steps"] = _solver->steps();
     _out["time_s"] = _solver->time();
     const auto& tm = _solver->timings();
-    _out["step_time_s"] = {{"links_and_contacts", tm.forces}, {"projectile_contacts", tm.bodies},
+    _out["step_time_s"] = {{"links_and_contacts", tm.forces}, {"links", tm.forces - tm.contacts},
+                           {"sphere_contacts", tm.contacts}, {"projectile_contacts", tm.bodies},
                            {"neighbours", tm.neighbours}, {"integration", tm.integration}};
     const double link_steps = static_cast<double>(_links.size()) * _solver->steps();
     const double wall = tm.forces + tm.bodies + tm.neighbours + tm.integration;

@@ -28,6 +28,9 @@ struct ForceCounters
   /// calls. C0 enters nothing else, so a run with another C0 above it (all
   /// else equal) is the same bit for bit: a test can be reused across C0.
   double cohesion_demand = 0.0;
+  /// Wall time of the sphere contacts' part of the calls so far [s]: their
+  /// pairs' index and sweep (timing only: not in a checkpoint).
+  double contact_seconds = 0.0;
 };
 
 /// Computes forces and torques on all particles from the intact links and

@@ -69,7 +69,8 @@ struct Removed
 /// Wall time spent in each part of the steps so far [s].
 struct DemTimings
 {
-  double forces = 0.0;      ///< compute_forces: links and sphere contacts (one sweep)
+  double forces = 0.0;      ///< compute_forces: links and sphere contacts
+  double contacts = 0.0;    ///< of forces: the sphere contacts' part
   double bodies = 0.0;      ///< the rigid bodies' contacts
   double bars = 0.0;        ///< the bars' elements and bonds
   double neighbours = 0.0;  ///< neighbour-list checks and rebuilds
