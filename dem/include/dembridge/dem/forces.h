@@ -15,7 +15,8 @@ namespace dembridge::dem
 {
 struct Bars;
 
-/// Energy dissipated or stored in the force loop since the start [J].
+/// Energy dissipated or stored in the force loop since the start [J], and
+/// the wall time of its contacts' part.
 struct ForceCounters
 {
   double friction = 0.0;   ///< sliding of contacts
