@@ -19,6 +19,11 @@ different striking speeds are what separate R from N).
         --diameter 0.0254 --density 2400 --crh 3 --from 0.07 --to 0.10
 
 prints R, N, the nose's N* and each run's fitted and measured mean force.
+With --bands W [m] it also prints, for each run, the mean resistance F / A
+over successive depth bands W wide within the window (the drop of the
+projectile's kinetic energy between the band's first and last samples over
+their depth apart) and the band's rms speed: how the resistance follows the
+speed and the depth, whatever the two-term form.
 """
 import argparse
 import csv
@@ -44,6 +49,23 @@ def window(x, v, e, lo, hi):
     return v[keep], f[keep]
 
 
+def bands(x, v, e, lo, hi, width, area):
+    """[(band start, band end, rms speed, mean resistance [Pa])] over the
+    bands [lo + k width, lo + (k + 1) width) within [lo, hi] that hold at
+    least 3 samples: the energy drop between the band's first and last
+    samples over their depth apart, per unit of the shank's area."""
+    out = []
+    start = lo
+    while start < hi - 1e-12:
+        end = min(start + width, hi)
+        keep = np.nonzero((x >= start) & (x < end))[0]
+        if len(keep) >= 3 and x[keep[-1]] > x[keep[0]]:
+            f = (e[keep[0]] - e[keep[-1]]) / (x[keep[-1]] - x[keep[0]])
+            out.append((start, end, float(np.sqrt(np.mean(v[keep] ** 2))), f / area))
+        start = end
+    return out
+
+
 def fit(data, area, density):
     """R [Pa] and N of F = A (R + N rho v^2), least squares over the
     (speed, force) arrays of every run together."""
@@ -64,12 +86,16 @@ def main():
     a.add_argument("--crh", type=float, default=0.0, help="ogive calibre-radius-head, for N* (0: not printed)")
     a.add_argument("--from", dest="lo", type=float, required=True, help="window start: tip depth [m]")
     a.add_argument("--to", dest="hi", type=float, required=True, help="window end: tip depth [m]")
+    a.add_argument("--bands", type=float, default=0.0,
+                   help="also print each run's mean resistance over depth bands this wide [m] (0: not)")
     o = a.parse_args()
     for name, value in (("--diameter", o.diameter), ("--density", o.density)):
         if not value > 0.0:
             sys.exit(f"{name} = {value}: must be > 0")
     if not 0.0 <= o.lo < o.hi:
         sys.exit(f"--from {o.lo}, --to {o.hi}: need 0 <= from < to")
+    if not 0.0 <= o.bands:
+        sys.exit(f"--bands {o.bands}: must be >= 0 (0: no bands)")
     area = math.pi * o.diameter ** 2 / 4.0
     data = []
     for run in o.runs:
@@ -92,6 +118,12 @@ def main():
         model = area * (r + n * o.density * np.mean(v ** 2))
         print(f"  {run}: speed {v.max():.0f}-{v.min():.0f} m/s, mean force {np.mean(f) / 1e3:.0f} kN "
               f"(fit {model / 1e3:.0f} kN)")
+    if o.bands > 0.0:
+        print(f"mean resistance over {o.bands * 1e3:g} mm bands (rms speed; the fit's R + N rho v^2):")
+        for run in o.runs:
+            for b0, b1, vb, pb in bands(*read_history(run), o.lo, o.hi, o.bands, area):
+                print(f"  {run}: {b0 * 1e3:.0f}-{b1 * 1e3:.0f} mm: {vb:.0f} m/s, {pb / 1e6:.0f} MPa "
+                      f"({(r + n * o.density * vb * vb) / 1e6:.0f} MPa)")
 
 if __name__ == "__main__":
     main()

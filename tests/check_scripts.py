@@ -13,7 +13,10 @@
   projectile histories made from the closed-form solution of that force
   law (R = 500 MPa, N = 0.106; 0.5 kg, 25.4 mm, 1000 and 700 m/s, sampled
   every 0.1 mm) within 1 % (the central differences of the energy on that
-  grid err by about 1e-5).
+  grid err by about 1e-5), and its --bands resistance over 10 mm bands
+  of the 1000 m/s history within 1 % of R + N rho v^2 at the band's rms
+  speed (the force varies by a few % across a band; the energy drop over
+  the band is the force's mean, the rms speed's square its speed term's).
 Usage: check_scripts.py SOURCE_DIR"""
 import math
 import os
@@ -56,6 +59,16 @@ print(f"resistance fit of synthetic histories: R {r_fit / 1e6:.2f} MPa, N {n_fit
 for key, got, want in (("R", r_fit, r_true), ("N", n_fit, n_true)):
     if abs(got / want - 1) > 0.01:
         problems.append(f"resistance fit: {key} {got} instead of {want}")
+v0 = 1000.0
+v = np.sqrt((v0 ** 2 + c) * np.exp(-2 * area * n_true * rho * x / mass) - c)
+rows = resistance.bands(x, v, 0.5 * mass * v ** 2, 0.05, 0.12, 0.01, area)
+if len(rows) != 7:
+    problems.append(f"resistance bands: {len(rows)} bands of 10 mm over 50-120 mm instead of 7")
+for b0, b1, vb, pb in rows:
+    want = r_true + n_true * rho * vb * vb
+    print(f"band {1e3 * b0:.0f}-{1e3 * b1:.0f} mm: {vb:.0f} m/s, {pb / 1e6:.1f} MPa (law {want / 1e6:.1f})")
+    if abs(pb / want - 1) > 0.01:
+        problems.append(f"resistance band {b0}-{b1}: {pb} Pa instead of {want}")
 for q in problems:
     print(q)
 sys.exit(1 if problems else 0)
