@@ -617,6 +617,11 @@ TEST_CASE("loading plate: the spheres of a loaded set move as one along the load
                     Contains("sphere 0") && Contains("held"));
   CHECK_THROWS_WITH(s.add_force({"p3", {1}, {0.0, 0.0, 0.0}, [](double) { return 1.0; }, true}),
                     Contains("non-zero"));
+  // held along the load, refused; held across it only (a platen's sphere
+  // held axially under a side plate), accepted
+  CHECK_THROWS_WITH(s.add_motion({"b2 in x", {3}, MotionKind::velocity, {true, false, false}, [](double) { return 0.0; }}),
+                    Contains("along the load") && Contains("sphere 3"));
+  CHECK_NOTHROW(s.add_motion({"b1 in z", {1}, MotionKind::velocity, {false, false, true}, [](double) { return 0.0; }}));
 }
 
 namespace

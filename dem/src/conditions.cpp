@@ -76,8 +76,11 @@ void DemSolver::add_motion(ParticleMotion m)
     if (f.plate)
       for (auto i : m.ids)
         if (std::find(f.ids.begin(), f.ids.end(), i) != f.ids.end())
-          throw std::runtime_error("condition '" + m.name + "' holds sphere " + std::to_string(i)
-                                   + " of the loading plate '" + f.name + "': a plate's spheres must move freely");
+          for (int k = 0; k < 3; ++k)
+            if (f.direction[k] != 0.0 && (m.kind == MotionKind::fixed || m.hinged() || m.components[k]))
+              throw std::runtime_error("condition '" + m.name + "' holds sphere " + std::to_string(i)
+                                       + " of the loading plate '" + f.name
+                                       + "' along the load: a plate's spheres must move freely along it");
   for (const auto& o : _motions)
   {
     if (!m.hinged() && !o.hinged())
@@ -132,9 +135,10 @@ void DemSolver::add_force(ParticleForce f)
       throw std::runtime_error("force '" + f.name + "': a loading plate needs a non-zero, finite direction");
     for (auto i : f.ids)
       for (int k = 0; k < 3; ++k)
-        if (_held[6 * i + k])
+        if (_held[6 * i + k] && f.direction[k] != 0.0)
           throw std::runtime_error("force '" + f.name + "': sphere " + std::to_string(i)
-                                   + " of the loading plate is held by a condition; a plate's spheres must move freely");
+                                   + " of the loading plate is held along the load by a condition; a plate's "
+                                     "spheres must move freely along it");
     for (const auto& o : _motions)
       if (o.hinged())
         for (auto i : f.ids)

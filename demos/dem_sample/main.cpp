@@ -1,6 +1,6 @@
 // dem_sample: a discrete element sample of concrete (cylinder or square
-// prism) in quasi-static uniaxial tension or compression (docs/method.md
-// sections 1.1-1.14). A dense polydisperse packing is generated (or read), bonded with
+// prism) in quasi-static uniaxial tension or compression, or a prism in
+// triaxial compression (docs/method.md sections 1.1-1.14). A dense polydisperse packing is generated (or read), bonded with
 // cohesive links within lambda (R_a + R_b), and loaded by the platens at a
 // constant strain rate with velocity-proportional damping. It reports the
 // macroscopic Young's modulus (initial tangent), Poisson's ratio, peak stress
@@ -9,6 +9,7 @@
 // Sample runs:
 //   build/bin/dem_sample --test tension --output out/tension --summary out/tension.json
 //   build/bin/dem_sample --test compression --shape prism --mean-radius 0.003
+//   build/bin/dem_sample --test triaxial --shape prism --confinement 50e6
 //   build/bin/dem_sample --packing my_spheres.txt --lambda 1.4
 // Output: DIR/particles.xdmf (+ .h5: positions, radius, displacement,
 // velocity, damage, and the broken links as line cells), DIR/stress_strain.csv.
@@ -26,11 +27,14 @@ int main(int argc, char** argv)
   demo::SampleConfig c;
   std::string summary;
   auto& m = c.material;
-  CLI::App app{"DE sample in quasi-static uniaxial tension or compression", "dem_sample"};
+  CLI::App app{"DE sample in quasi-static uniaxial tension or compression, or triaxial compression", "dem_sample"};
   using demo::Allowed;
   const Allowed angle{0.0, 90.0, false, true, {}, {}};
-  demo::add_choice(app, "--test", c.test, "the test", "tension | compression");
+  demo::add_choice(app, "--test", c.test, "the test", "tension | compression | triaxial");
   demo::add_choice(app, "--shape", c.shape, "the sample's shape", "cylinder | prism");
+  demo::add_number(app, "--confinement", c.confinement,
+                   "triaxial test: the side plates' lateral pressure, reached hydrostatically, then held [Pa]",
+                   Allowed::positive(1e10).or_value(0.0, "none: tension or compression"));
   demo::add_number(app, "--diameter", c.diameter, "cylinder diameter or prism side [m]", Allowed::positive(10.0));
   demo::add_number(app, "--height", c.height, "sample height [m]", Allowed::positive(10.0));
   demo::add_number(app, "--mean-radius", c.mean_radius, "mean sphere radius [m]", Allowed::positive(1.0));
@@ -101,8 +105,8 @@ int main(int argc, char** argv)
                "dynamic tests: every sphere starts at the affine velocity strain-rate x z, the platens at full "
                "speed (no ramp, no wave from the platens); damping then defaults to 0");
   demo::add_number(app, "--max-strain", c.max_strain, "stop at this strain [-]",
-                   Allowed::positive(1.0).or_value(0.0, "5e-4 tension, 5e-3 compression"));
-  demo::add_number(app, "--stop-ratio", c.stop_ratio, "stop when the stress falls below this x peak [-]",
+                   Allowed::positive(1.0).or_value(0.0, "5e-4 tension, 5e-3 compression, 3e-2 triaxial"));
+  demo::add_number(app, "--stop-ratio", c.stop_ratio, "stop when the stress (triaxial: the deviator) falls below this x peak [-]",
                    Allowed{0.0, 1.0, false, true, {}, {}});
   app.add_flag("--to-separation", c.to_separation,
                "tension until separated: the force through the crack below 1 % of the peak (fracture energy; "

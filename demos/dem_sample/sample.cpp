@@ -100,6 +100,7 @@ public:
     build_sample();
     resolve_time_step();
     set_up_platens();
+    set_up_confinement();
     set_up_gauges();
     _solver->track_cohesion_demand();
     _solver->start();
@@ -124,8 +125,21 @@ private:
     const SampleConfig& cfg = _cfg;
     if (cfg.shape != "cylinder" && cfg.shape != "prism")
       throw std::runtime_error("shape '" + cfg.shape + "': allowed are cylinder, prism");
-    if (cfg.test != "tension" && cfg.test != "compression")
-      throw std::runtime_error("test '" + cfg.test + "': allowed are tension, compression");
+    if (cfg.test != "tension" && cfg.test != "compression" && cfg.test != "triaxial")
+      throw std::runtime_error("test '" + cfg.test + "': allowed are tension, compression, triaxial");
+    const bool triaxial = cfg.test == "triaxial";
+    if (triaxial && cfg.shape != "prism")
+      throw std::runtime_error("a triaxial test needs shape prism (its four side faces take the confining "
+                               "plates), not " + cfg.shape);
+    if (triaxial && !(cfg.confinement > 0.0))
+      throw std::runtime_error("confinement " + std::to_string(cfg.confinement)
+                               + " Pa: a triaxial test needs a lateral pressure > 0");
+    if (!triaxial && cfg.confinement != 0.0)
+      throw std::runtime_error("confinement " + std::to_string(cfg.confinement) + " Pa: only a triaxial test has one, not "
+                               + cfg.test);
+    if (triaxial && (cfg.ligament != 1.0 || cfg.uniform_start))
+      throw std::runtime_error("a triaxial test takes neither a notch (ligament " + std::to_string(cfg.ligament)
+                               + ", must be 1) nor a uniform start");
     if (!(cfg.diameter > 0.0) || !(cfg.height > 0.0))
       throw std::runtime_error("sample size: diameter and height must be > 0 m");
     if (!(cfg.strain_rate > 0.0))
@@ -202,8 +216,10 @@ private:
     // uniform start: none unless asked for)
     _damping = cfg.damping >= 0.0 ? cfg.damping : (cfg.uniform_start ? 0.0 : omega1);
     const double sign = cfg.test == "tension" ? 1.0 : -1.0;
-    _max_strain = cfg.max_strain > 0.0 ? cfg.max_strain
-                                       : (cfg.test == "tension" && !cfg.to_separation ? 5e-4 : 5e-3);
+    _max_strain = cfg.max_strain > 0.0              ? cfg.max_strain
+                  : cfg.test == "triaxial"          ? 3e-2
+                  : cfg.test == "tension" && !cfg.to_separation ? 5e-4
+                                                    : 5e-3;
     _v_top = sign * cfg.strain_rate * H;
     _t_ramp = cfg.uniform_start ? 0.0 : 20.0 * H / _c_wave;
   }
@@ -248,6 +264,97 @@ private:
       for (auto i : _top)
         _p.v[3 * i + 2] = v_top;
     }
+  }
+
+  /// Triaxial test: four loading plates (dem::ParticleForce::plate), one
+  /// per side face of the prism, of the spheres touching it (centre within
+  /// r + layer): those at a vertical edge belong to both faces, the
+  /// platens' spheres (held axially only) too, so that no sphere is squeezed
+  /// out between two plates or between a plate and a platen. Each pushes its face inwards with the
+  /// lateral stress times the face's current area (side_force): the sample
+  /// is first compressed hydrostatically, then axially under the constant
+  /// lateral pressure.
+  void set_up_confinement()
+  {
+    if (_cfg.test != "triaxial")
+      return;
+    const double D = _cfg.diameter;
+    for (std::size_t i = 0; i < _p.size(); ++i)
+    {
+      const double* x = &_p.x[3 * i];
+      const double d[4] = {x[0], D - x[0], x[1], D - x[1]};
+      for (int k = 0; k < 4; ++k)
+        if (d[k] - _p.r[i] < _layer)
+          _side[k].push_back(static_cast<std::int32_t>(i));
+    }
+    static const char* names[4] = {"side x-", "side x+", "side y-", "side y+"};
+    for (int k = 0; k < 4; ++k)
+    {
+      if (_side[k].empty())
+        throw std::runtime_error(std::string("no sphere touches the ") + names[k]
+                                 + " face: is the packing made for this sample size?");
+      std::array<double, 3> inward{0.0, 0.0, 0.0};
+      inward[k / 2] = k % 2 == 0 ? 1.0 : -1.0;
+      const double share = 1.0 / static_cast<double>(_side[k].size());
+      _solver->add_force({names[k], _side[k], inward,
+                          [this, k, share](double t) { return side_force(k, t) * share; }, true});
+    }
+  }
+
+  /// The force on side face k at time t [N]: the lateral stress times the
+  /// face's current area (the four computed once per time). The lateral
+  /// stress is the axial compressive stress at the last step until it
+  /// reaches the confinement, the confinement from then on.
+  double side_force(int k, double t)
+  {
+    if (t != _side_t)
+    {
+      _side_t = t;
+      const double P = _cfg.confinement;
+      _lateral = _confined ? P : std::clamp(-axial_stress(), 0.0, P);
+      _confined = _lateral == P;
+      for (int q = 0; q < 4; ++q)
+        _side_f[q] = _lateral * side_area(q);
+    }
+    return _side_f[k];
+  }
+
+  /// The mean outward displacement of side face k's plate [m].
+  double side_displacement(int k) const
+  {
+    const int c = k / 2;
+    const double out = k % 2 == 0 ? -1.0 : 1.0;
+    double u = 0.0;
+    for (auto i : _side[k])
+      u += _p.x[3 * i + c] - _p.x0[3 * i + c];
+    return out * u / static_cast<double>(_side[k].size());
+  }
+  /// Current widths of the prism along x and y [m] (the side plates' distance).
+  std::array<double, 2> widths() const
+  {
+    const double D = _cfg.diameter;
+    return {D + side_displacement(0) + side_displacement(1), D + side_displacement(2) + side_displacement(3)};
+  }
+  /// Current area of side face k [m^2]: its width times the platens' distance.
+  double side_area(int k) const
+  {
+    const double h = _cfg.height + mean_uz(_top) - mean_uz(_bottom);
+    return widths()[k / 2 == 0 ? 1 : 0] * h;
+  }
+  /// The axial stress [Pa] (> 0 in tension), averaged over the gauge: the
+  /// platens' reactions at the last step (see measure()) over the cross
+  /// section, its current one in a triaxial test (the strains reach
+  /// several %).
+  double axial_stress() const
+  {
+    double area = _area;
+    if (_cfg.test == "triaxial")
+    {
+      const auto w = widths();
+      area = w[0] * w[1];
+    }
+    const double s_top = _solver->reaction("top")[2] / area, s_bot = -_solver->reaction("bottom")[2] / area;
+    return s_bot + 13.0 / 48.0 * (s_top - s_bot);
   }
 
   void set_up_gauges()
@@ -339,7 +446,7 @@ private:
     _csv.open(dir / "stress_strain.csv");
     _csv << "time_s,strain,stress_pa,lateral_strain,bottom_reaction_n,links_broken_tension,"
             "links_broken_shear,kinetic_j,elastic_j,softening_j,breakage_j,friction_j,damping_j,"
-            "work_j,imbalance_j,gauge_strain,top_reaction_n\n";
+            "work_j,imbalance_j,gauge_strain,top_reaction_n,lateral_stress_pa\n";
   }
 
   /// Continues from the checkpoint: the solver's state, the curves and
@@ -354,10 +461,11 @@ private:
     run.read("stress", _sig);
     run.read("lateral_strain", _lat);
     run.read("gauge_strain", _ax);
+    run.read("lateral_stress", _conf);
     std::vector<double> tracked;
     run.read("tracked", tracked);
-    if (tracked.size() != 7)
-      run.fail("tracked", "not the 7 values of the peak tracking (file damaged?)");
+    if (tracked.size() != 11)
+      run.fail("tracked", "not the 11 values of the peak tracking (file damaged, or of another version?)");
     _peak = tracked[0];
     _eps_peak = tracked[1];
     _dissipated_at_peak = tracked[2];
@@ -365,6 +473,10 @@ private:
     _after_peak = tracked[4] != 0.0;
     _separated = tracked[5] != 0.0;
     _t_low = tracked[6];
+    _axial_at_peak = tracked[7];
+    _lateral_at_peak = tracked[8];
+    _confined = tracked[9] != 0.0;
+    _lateral = tracked[10];
     _out["restarted_from_step"] = _solver->steps();
     if (_cfg.output_dir.empty())
       return;
@@ -383,8 +495,11 @@ private:
     run.write("stress", _sig);
     run.write("lateral_strain", _lat);
     run.write("gauge_strain", _ax);
+    run.write("lateral_stress", _conf);
     run.write("tracked", std::vector<double>{_peak, _eps_peak, _dissipated_at_peak, _demand_at_peak,
-                                             _after_peak ? 1.0 : 0.0, _separated ? 1.0 : 0.0, _t_low});
+                                             _after_peak ? 1.0 : 0.0, _separated ? 1.0 : 0.0, _t_low,
+                                             _axial_at_peak, _lateral_at_peak, _confined ? 1.0 : 0.0,
+                                             _lateral});
     if (_writer)
       _writer->save(root.group("particles_xdmf"));
     if (_csv.is_open())
@@ -460,7 +575,8 @@ private:
     // - s_bot). The top platen's stress alone makes E and sigma_t depend on
     // the loading rate (by ~2 % when it is halved).
     const double s_top = _solver->reaction("top")[2] / _area, s_bot = -_solver->reaction("bottom")[2] / _area;
-    const double stress = s_bot + 13.0 / 48.0 * (s_top - s_bot);
+    const double stress = axial_stress();
+    const double confining = _lateral; // as applied over the last step (0 but in a triaxial test)
     double ul = 0.0;
     for (std::size_t g = 0; g < _gauge.size(); ++g)
       for (int k = 0; k < 3; ++k)
@@ -471,18 +587,28 @@ private:
     _ax.push_back(axial);
     _sig.push_back(stress);
     _lat.push_back(lateral);
-    track_peak(strain, stress, s_bot);
+    _conf.push_back(confining);
+    track_peak(strain, stress, confining, s_bot);
     if (_csv.is_open() || print)
-      write_point(print, strain, stress, lateral, axial, s_top);
+      write_point(print, strain, stress, lateral, axial, s_top, confining);
     if (frame && _writer)
       _writer->write(_solver->time(), _p, _links);
   }
 
-  void track_peak(double strain, double stress, double s_bot)
+  /// The peak of |axial stress| (of the deviator, |axial stress| less the
+  /// lateral one, in a triaxial test), the stop criteria.
+  void track_peak(double strain, double stress, double confining, double s_bot)
   {
-    if (std::abs(stress) > _peak)
+    const double tracked = std::abs(stress) - confining;
+    // (a triaxial test's deviator counts from the held confinement on: in
+    // the hydrostatic phase it is the last step's lag alone)
+    if (_cfg.test == "triaxial" && !_confined)
+      return;
+    if (tracked > _peak)
     {
-      _peak = std::abs(stress);
+      _peak = tracked;
+      _axial_at_peak = stress;
+      _lateral_at_peak = confining;
       _eps_peak = std::abs(strain);
       const auto e = _solver->energy();
       _dissipated_at_peak = e.softening + e.breakage;
@@ -508,11 +634,12 @@ private:
       else
         _t_low = -1.0;
     }
-    else if (_peak > 0.0 && std::abs(stress) < _cfg.stop_ratio * _peak)
+    else if (_peak > 0.0 && tracked < _cfg.stop_ratio * _peak)
       _after_peak = true;
   }
 
-  void write_point(bool print, double strain, double stress, double lateral, double axial, double s_top)
+  void write_point(bool print, double strain, double stress, double lateral, double axial, double s_top,
+                   double confining)
   {
     const auto e = _solver->energy();
     const auto bt = _links.count(LinkState::broken_tension), bs = _links.count(LinkState::broken_shear);
@@ -521,7 +648,7 @@ private:
            << _solver->reaction("bottom")[2] << ',' << bt << ',' << bs << ',' << e.kinetic << ','
            << e.elastic << ',' << e.softening << ',' << e.breakage << ',' << e.friction << ','
            << e.damping << ',' << e.external_work + e.prescribed_work << ',' << e.imbalance()
-           << ',' << axial << ',' << s_top * _area << '\n';
+           << ',' << axial << ',' << s_top * _area << ',' << confining << '\n';
     if (print && !_cfg.quiet)
       std::cout << std::scientific << std::setprecision(4) << std::setw(12) << strain
                 << std::setw(15) << stress << std::setw(7) << bt << "/" << std::left
@@ -537,6 +664,11 @@ private:
   /// and 30 % of the peak, before the peak, on the axial gauge.
   void measure_moduli()
   {
+    if (_cfg.test == "triaxial")
+    {
+      measure_triaxial_moduli();
+      return;
+    }
     std::vector<double> e1, s1, l1, ep;
     for (std::size_t i = 0; i < _eps.size(); ++i)
     {
@@ -558,9 +690,57 @@ private:
     _out["poisson_ratio"] = nu;
   }
 
+  /// Triaxial test: the bulk modulus of the hydrostatic phase, the slope of
+  /// the mean stress (|axial| + 2 lateral) / 3 against the volumetric strain
+  /// (the axial gauge's and twice the lateral gauge's, shortening > 0), over
+  /// the points with the lateral pressure between 10 % and 50 % of the
+  /// confinement; and Young's modulus and Poisson's ratio of the deviatoric
+  /// phase (the lateral pressure held), the slopes of the deviator and of
+  /// the lateral strain against the axial gauge strain over the points with
+  /// the deviator between 5 % and 30 % of its peak, before the peak. An
+  /// isotropic elastic solid has K = E / (3 (1 - 2 nu)), and the deviatoric
+  /// phase's E and nu are the uniaxial test's.
+  void measure_triaxial_moduli()
+  {
+    std::vector<double> ev, pm, ea, q, el;
+    const double P = _cfg.confinement;
+    for (std::size_t i = 0; i < _eps.size(); ++i)
+    {
+      if (_conf[i] >= 0.1 * P && _conf[i] <= 0.5 * P)
+      {
+        ev.push_back(-(_ax[i] + 2.0 * _lat[i]));
+        pm.push_back((std::abs(_sig[i]) + 2.0 * _conf[i]) / 3.0);
+      }
+      const double d = std::abs(_sig[i]) - _conf[i];
+      if (std::abs(_eps[i]) > _eps_peak)
+        break;
+      if (_conf[i] == P && d >= 0.05 * _peak && d <= 0.3 * _peak)
+      {
+        ea.push_back(_ax[i]);
+        q.push_back(-d);
+        el.push_back(_lat[i]);
+      }
+    }
+    _out["bulk_modulus_pa"] = ev.size() >= 3 ? slope(ev, pm) : 0.0;
+    _out["youngs_modulus_pa"] = ea.size() >= 3 ? slope(ea, q) : 0.0;
+    _out["poisson_ratio"] = ea.size() >= 3 ? -slope(ea, el) : 0.0;
+  }
+
   void report()
   {
-    _out["peak_stress_pa"] = _peak;
+    if (_cfg.test == "triaxial")
+    {
+      // the deviator's peak, with the stresses then (compression > 0)
+      _out["confinement_pa"] = _cfg.confinement;
+      _out["peak_deviator_pa"] = _peak;
+      _out["axial_stress_at_peak_pa"] = std::abs(_axial_at_peak);
+      _out["lateral_stress_at_peak_pa"] = _lateral_at_peak;
+      _out["mean_stress_at_peak_pa"] = (std::abs(_axial_at_peak) + 2.0 * _lateral_at_peak) / 3.0;
+      _out["final_deviator_pa"] = std::abs(_sig.back()) - _conf.back();
+      _out["final_lateral_strain"] = _lat.back();
+      _out["final_gauge_strain"] = _ax.back();
+    }
+    _out["peak_stress_pa"] = _cfg.test == "triaxial" ? std::abs(_axial_at_peak) : _peak;
     _out["strain_at_peak"] = _eps_peak;
     _out["final_strain"] = _eps.back();
     _out["links_broken_tension"] = _links.count(LinkState::broken_tension);
@@ -641,13 +821,19 @@ private:
   // platens and gauges
   double _layer = 0.0, _half_width = 0.0, _gauge_length = 0.0;
   std::vector<std::int32_t> _bottom, _top, _gauge, _g_lo, _g_hi;
+  std::array<std::vector<std::int32_t>, 4> _side; // a triaxial test's side faces: x-, x+, y-, y+
+  std::array<double, 4> _side_f{};                // their forces at _side_t [N]
+  double _side_t = -1.0;
+  double _lateral = 0.0;   // the lateral stress applied over the last step [Pa]
+  bool _confined = false;  // the lateral stress has reached the confinement
   std::vector<std::array<double, 3>> _gauge_dir;
   // output
   std::unique_ptr<ParticleWriter> _writer;
   std::ofstream _csv;
   // the curves and what is tracked along them
-  std::vector<double> _eps, _sig, _lat, _ax;
+  std::vector<double> _eps, _sig, _lat, _ax, _conf; // _conf: the side plates' pressure (triaxial)
   double _peak = 0.0, _eps_peak = 0.0;
+  double _axial_at_peak = 0.0, _lateral_at_peak = 0.0; // stresses at the peak [Pa]
   double _dissipated_at_peak = 0.0; // by the links (softening + breakage) [J]
   double _demand_at_peak = 0.0;     // the solver's cohesion demand then [Pa]
   bool _after_peak = false, _separated = false;

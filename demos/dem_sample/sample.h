@@ -1,6 +1,6 @@
 #pragma once
 /// @file sample.h
-/// Quasi-static uniaxial tension or compression of a DE sample (cylinder or
+/// Quasi-static uniaxial tension or compression, or triaxial compression, of a DE sample (cylinder or
 /// square prism), as a function the dem_sample demo, the tests and the
 /// calibration share. The bottom layer of spheres is held axially, the top
 /// layer moves axially at a constant strain rate (ramped in over 20 wave
@@ -9,7 +9,9 @@
 /// strain of the middle half (spheres centred within Rmax of H/4 and 3H/4),
 /// the lateral strain of the surface spheres of the middle third, and the
 /// stress averaged over the gauge from the two platen reactions. The platen
-/// strain (displacement over the height) is also written.
+/// strain (displacement over the height) is also written. A triaxial test
+/// (prism) adds a lateral pressure through four rigid, frictionless side
+/// plates, one per side face (SampleConfig::confinement).
 
 #include "dembridge/dem/assembly.h"
 #include "dembridge/dem/packing.h"
@@ -34,15 +36,20 @@ struct SampleConfig
   double lambda = 0.0;              ///< interaction range; 0 = from links_per_sphere
   double links_per_sphere = 12.0;
   dem::Material material;
-  std::string test = "tension";     ///< tension | compression
+  std::string test = "tension";     ///< tension | compression | triaxial
+  /// Triaxial test (prism only): the lateral pressure [Pa] four rigid side
+  /// plates apply. They follow the axial stress up to it (the hydrostatic
+  /// phase), then hold it while the top platen goes on (the deviatoric
+  /// phase). 0 for the other tests.
+  double confinement = 0.0;
   /// Circumferential notch at mid-height (cylinder; prism: on all four
   /// faces): the links crossing z = H/2 outside the ligament are removed.
   /// The ligament's share of the cross-section, in (0, 1]; 1 = no notch.
   /// Stresses, fracture energy are then per ligament area.
   double ligament = 1.0;
   double strain_rate = 0.1;         ///< [1/s], > 0
-  double max_strain = 0.0;          ///< stop at this strain; 0 = 5e-4 tension, 5e-3 compression
-  double stop_ratio = 0.5;          ///< stop when |stress| falls below this x peak after the peak
+  double max_strain = 0.0;          ///< stop at this strain; 0 = 5e-4 tension, 5e-3 compression, 3e-2 triaxial
+  double stop_ratio = 0.5;          ///< stop when |stress| (triaxial: the deviator) falls below this x peak after the peak
   /// Tension until the sample is separated (the force through the crack,
   /// on the bottom platen, stays below 1 % of the peak for two periods of
   /// the first axial mode), for the fracture energy; stop_ratio is then not

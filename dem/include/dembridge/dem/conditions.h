@@ -67,8 +67,9 @@ struct ParticleForce
   /// kept) after every kick, so the set moves as one along the load and the
   /// total force spreads as a stiff loading plate spreads it, whatever each
   /// sphere's bonds (an equal share per sphere would push a loosely bonded
-  /// surface sphere far out). Other components stay free. The set must not
-  /// share spheres with a kinematic condition.
+  /// surface sphere far out). Other components stay free. No kinematic
+  /// condition may hold its spheres along `direction` (one holding other
+  /// components, e.g. a platen held axially under a side plate, may).
   bool plate = false;
   /// With `plate`: the plate may also rotate, as one loaded through a ball
   /// joint: the velocity components along `direction` are made an affine
