@@ -89,6 +89,9 @@ int main(int argc, char** argv)
   demo::add_number(app, "--softening", m.zeta, "softening factor zeta [-]", Allowed::non_negative(1e6));
   demo::add_number(app, "--phi-i", m.phi_i_deg, "internal friction angle [degree]", angle);
   demo::add_number(app, "--phi-c", m.phi_c_deg, "contact friction angle [degree]", angle);
+  demo::add_number(app, "--contact-shear-limit", m.contact_shear_limit,
+                   "Tresca limit of the contacts' friction, beside F_c tan(phi_c) [Pa]",
+                   Allowed::positive(1e12).or_value(0.0, "none"));
   demo::add_number(app, "--rate-fc", m.rate_fc,
                    "strain-rate effect on the links' T and C0: the Malvar-Ross law's compressive strength f_c [Pa]",
                    Allowed::positive(1e10).or_value(0.0, "no rate effect"));
