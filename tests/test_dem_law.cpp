@@ -416,6 +416,79 @@ TEST_CASE("compaction: a link crushed, unloaded and pulled follows the law, its 
   CHECK_THAT(stored + compaction + softening + counters.breakage, WithinRel(work, 1e-6));
 }
 
+TEST_CASE("compaction under a pressure gate: elastic below it, then from the strain it opened at",
+          "[dem][compaction]")
+{
+  // The pair of the test above, gated at the pressure its spheres have at
+  // a compressive strain of 0.004 (twice the onset): from the virial, each
+  // sphere's p = -rho F_n D / (6 m) = rho K_n D_init e D / (6 m). Below it
+  // the link stays elastic, its onset following its strain; from it on it
+  // compacts from that strain, with the law's stiffness ratio, the force
+  // continuous (no step larger than an elastic step's). Unloaded to zero
+  // force, the work equals what it stores plus the compaction's dissipation
+  // from its own onset (to 1e-6, as above). Gated above the pressure the
+  // walk reaches, the link stays elastic throughout.
+  Material m;
+  m.micro = {0.2, 1.0, 1.0};
+  Particles p = make_particles(std::vector<double>{0, 0, 0, 2e-3, 0, 0}, std::vector<double>{1e-3, 1e-3}, 2400.0, 1.0);
+  const Links l0 = create_links(p, 1.01, m);
+  REQUIRE(l0.size() == 1);
+  const double d0 = l0.d0[0], kn = l0.kn[0], e_gate = 0.004;
+  auto pressure = [&](double e) { return m.density * kn * d0 * e * d0 * (1.0 - e) / (6.0 * p.m[0]); };
+  REQUIRE(p.m[0] == p.m[1]);
+  auto run = [&](double gate, double to, std::vector<double>& forces, double& work, Links& l)
+  {
+    m.compaction = {0.002, 0.3, 0.01, gate};
+    l = l0;
+    l.compaction.assign(1, 0.0); // as DemSolver sizes them
+    l.compaction_onset.assign(1, m.compaction.onset);
+    Particles q = p;
+    NeighbourList nl(1e-4);
+    ForceCounters counters;
+    double x_prev = q.x[3], f_prev = 0.0;
+    work = 0.0;
+    const int n = 6000;
+    for (int k = 1; k <= 2 * n; ++k)
+    {
+      // to `to`, then back to the set: zero force
+      const double e = k <= n ? to * k / n : to - (to + compaction_set(l.compaction[0], d0, link_compaction(l, 0, m.compaction)) / d0) * (k - n) / n;
+      q.x[3] = d0 * (1.0 - e);
+      std::fill(q.f.begin(), q.f.end(), 0.0);
+      nl.update(q.x, q.r, l);
+      compute_forces(q, l, nl, m, 0.0, counters);
+      work += -0.5 * (q.f[3] + f_prev) * (q.x[3] - x_prev);
+      x_prev = q.x[3];
+      f_prev = q.f[3];
+      forces.push_back(q.f[3]);
+    }
+  };
+  std::vector<double> f;
+  double work = 0.0;
+  Links l;
+  run(pressure(e_gate), 0.006, f, work, l);
+  // opened within one step of 1e-6 of the gate's strain
+  CHECK_THAT(l.compaction_onset[0], WithinAbs(e_gate, 1.1e-6));
+  // at 0.006: compacting from there, on the shifted envelope
+  CHECK_THAT(f[5999], WithinRel(kn * d0 * (e_gate + 0.3 * (0.006 - e_gate)), 1e-3));
+  CHECK_THAT(f[2999], WithinRel(kn * d0 * 0.003, 1e-9)); // elastic below the gate, past the onset (step 3000)
+  double largest = 0.0;
+  for (int k = 1; k < 6000; ++k)
+    largest = std::max(largest, std::abs(f[k] - f[k - 1]));
+  CHECK(largest <= 1.001 * kn * d0 * 1e-6);
+  CHECK_THAT(f.back(), WithinAbs(0.0, 1e-9 * kn * d0 * 0.006));
+  CHECK(compaction_energy(l, m) > 0.0);
+  CHECK_THAT(compaction_energy(l, m),
+             WithinRel(compaction_dissipation(0.006, kn, d0, m.compaction.from(l.compaction_onset[0])), 1e-12));
+  // (at zero force nothing is stored: the work is the dissipation)
+  CHECK_THAT(work, WithinRel(compaction_energy(l, m), 1e-6));
+  // gated above the walk's pressure: elastic throughout
+  f.clear();
+  run(2.0 * pressure(0.006), 0.006, f, work, l);
+  CHECK_THAT(l.compaction_onset[0], WithinRel(0.006, 1e-9)); // (the strain from the positions, to round-off)
+  CHECK_THAT(f[5999], WithinRel(kn * d0 * 0.006, 1e-9));
+  CHECK(compaction_energy(l, m) == 0.0);
+}
+
 TEST_CASE("compaction: a DE sample in hydrostatic compression follows the law's curve", "[dem][compaction]")
 {
   // A bonded packing compressed by an affine field x = (1 - e) x0 (every

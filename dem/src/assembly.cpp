@@ -56,6 +56,8 @@ void Material::validate() const
       impl::out_of_range("compaction stiffness ratio", c.stiffness, "in (0, 1]");
     if (!(c.lock > c.onset && c.lock < 1.0))
       impl::out_of_range("compaction lock strain", c.lock, "above the onset strain and below 1");
+    if (!(c.pressure >= 0.0) || !std::isfinite(c.pressure))
+      impl::out_of_range("compaction pressure gate", c.pressure, ">= 0 Pa (0 = none)");
   }
   // eq. [1] must give positive stiffnesses
   (void)link_stiffness(youngs_modulus, poisson_ratio, 1.0, 1.0, micro);

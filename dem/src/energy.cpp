@@ -36,7 +36,7 @@ double link_energy(const Particles& p, const Links& l, const Material& mat, cons
   }
   double delta = std::sqrt(dot3(d, d)) - l.d0[k];
   if (compacting)
-    delta -= compaction_set(l.compaction[k], l.d0[k], mat.compaction); // from the set
+    delta -= compaction_set(l.compaction[k], l.d0[k], link_compaction(l, k, mat.compaction)); // from the set
   const double fn = link_normal_force(delta, l.delta_max[k], law).fn;
   const double wk = l.weight.empty() ? 1.0 : l.weight[k];
   return wk * (0.5 * fn * delta + 0.5 * dot3(&l.fs[3 * k], &l.fs[3 * k]) / law.ks);
@@ -56,7 +56,8 @@ double contact_energy(const Particles& p, const Links& l, const NeighbourList& n
   const double rs = p.r[i] + p.r[j];
   // a broken compacted link's spheres touch from its rest distance (force_loop.cpp)
   const std::int32_t k = nl.link[q];
-  const double touch = compacting && k >= 0 ? rs + compaction_set(l.compaction[k], l.d0[k], mat.compaction) : rs;
+  const double touch =
+      compacting && k >= 0 ? rs + compaction_set(l.compaction[k], l.d0[k], link_compaction(l, k, mat.compaction)) : rs;
   const double gap = touch - std::sqrt(dot3(d, d));
   const double kn = mat.youngs_modulus * interaction_surface(p.r[i], p.r[j]) / rs * cf.cn;
   const double wq = p.weight.empty() ? 1.0 : 0.5 * (p.weight[i] + p.weight[j]);
@@ -108,10 +109,11 @@ double compaction_energy(const Links& l, const Material& mat)
   return impl::block_sum(l.size(),
                          [&](std::size_t k)
                          {
-                           if (!(l.compaction[k] > mat.compaction.onset))
+                           const CompactionLaw c = link_compaction(l, k, mat.compaction);
+                           if (!(l.compaction[k] > c.onset))
                              return 0.0;
                            return (l.weight.empty() ? 1.0 : l.weight[k])
-                                  * compaction_dissipation(l.compaction[k], l.kn[k], l.d0[k], mat.compaction);
+                                  * compaction_dissipation(l.compaction[k], l.kn[k], l.d0[k], c);
                          });
 }
 

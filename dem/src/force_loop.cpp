@@ -174,11 +174,13 @@ inline void pair_output(double* out, const double* n, double fn, const Vec3& fs,
     out[3 + q] = s * nxf[q];
   }
 }
-/// Per sphere, the sum of K_n (D - D_init) D over its intact links: > 0
-/// where its links are on the whole stretched (Material::rate_mean_tension).
-/// Each link's term on the team (w), then the sums in link order by one
-/// thread, so that they do not depend on the thread count.
-void sphere_stretch(const Particles& p, const Links& l, int nt, std::vector<double>& w, std::vector<double>& out)
+/// Per sphere, the sum of K_n e D over its intact links, with e =
+/// elongation(k, D) the link's elastic elongation at its length D: each
+/// link's term on the team (w), then the sums in link order by one thread,
+/// so that they do not depend on the thread count.
+template <typename Elongation>
+void sphere_sums(const Particles& p, const Links& l, int nt, std::vector<double>& w, std::vector<double>& out,
+                 Elongation&& elongation)
 {
   const auto nl = static_cast<std::int64_t>(l.size());
   w.resize(l.size());
@@ -194,7 +196,7 @@ void sphere_stretch(const Particles& p, const Links& l, int nt, std::vector<doub
     const double* xb = &p.x[3 * l.b[k]];
     const double d[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
     const double D = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    w[k] = l.kn[k] * (D - l.d0[k]) * D;
+    w[k] = l.kn[k] * elongation(static_cast<std::size_t>(k), D) * D;
   }
   out.assign(p.size(), 0.0);
   for (std::size_t k = 0; k < l.size(); ++k)
@@ -202,6 +204,27 @@ void sphere_stretch(const Particles& p, const Links& l, int nt, std::vector<doub
     out[l.a[k]] += w[k];
     out[l.b[k]] += w[k];
   }
+}
+
+/// Per sphere, the sum of K_n (D - D_init) D over its intact links: > 0
+/// where its links are on the whole stretched (Material::rate_mean_tension).
+void sphere_stretch(const Particles& p, const Links& l, int nt, std::vector<double>& w, std::vector<double>& out)
+{
+  sphere_sums(p, l, nt, w, out, [&](std::size_t k, double D) { return D - l.d0[k]; });
+}
+
+/// Per sphere, the mean pressure of its share of the intact links, from the
+/// virial: p_i = -sum(F_n D) / (6 V_i) over its links (each link's F_n D
+/// shared by its two spheres, the trace's third), V_i = m_i / rho the
+/// volume the sphere's mass stands for (CompactionLaw::pressure). F_n is
+/// the normal spring's K_n (D - D_init - set) at the step's start.
+void sphere_pressure(const Particles& p, const Links& l, const Material& mat, int nt, std::vector<double>& w,
+                     std::vector<double>& out)
+{
+  sphere_sums(p, l, nt, w, out, [&](std::size_t k, double D)
+              { return D - l.d0[k] - compaction_set(l.compaction[k], l.d0[k], link_compaction(l, k, mat.compaction)); });
+  for (std::size_t i = 0; i < p.size(); ++i)
+    out[i] *= -mat.density / (6.0 * p.m[i]);
 }
 } // namespace
 
@@ -252,9 +275,12 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   if (gated)
     sphere_stretch(p, l, nt, s.link_stretch, s.stretch);
   const bool compacting = mat.compaction.on() && l.compaction.size() == l.size();
+  const bool pressure_gated = compacting && mat.compaction.gated() && l.compaction_onset.size() == l.size();
+  if (pressure_gated)
+    sphere_pressure(p, l, mat, nt, s.link_stretch, s.pressure);
   // (the set, <= 0, is 0 for a link that never passed the onset)
   auto compacted_touch = [&](std::int32_t k, double rs)
-  { return rs + compaction_set(l.compaction[k], l.d0[k], mat.compaction); };
+  { return rs + compaction_set(l.compaction[k], l.d0[k], link_compaction(l, k, mat.compaction)); };
   const double* rad = p.r.data();
   bool short_team = false;
   std::size_t spinning = np; // a sphere turning by more than 1 rad in the step
@@ -300,17 +326,30 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     // cache line per link (measured: 5 % slower at 200k spheres)
     law.s_int = pair_surface(rec[record * i + 3], rec[record * l.b[k] + 3]);
     double delta = D - l.d0[k];
-    double e_max_old = 0.0; // the compaction at the step's start
+    double e_max_old = 0.0, onset_old = 0.0; // the compaction at the step's start
     if (compacting)
     {
       // compaction (law.h): the largest compressive strain so far, and the
-      // set it left, from which the rest of the law counts
+      // set it left, from which the rest of the law counts; under a pressure
+      // gate, a link not yet compacting whose spheres' mean pressure is below
+      // the gate moves its onset up to its strain (it stays elastic)
       const double e = -delta / l.d0[k];
       double& e_max = l.compaction[k];
       e_max_old = e_max;
+      if (pressure_gated)
+        onset_old = l.compaction_onset[k];
       if (e > e_max)
+      {
+        if (pressure_gated)
+        {
+          double& onset = l.compaction_onset[k];
+          if (e > onset && e_max <= onset
+              && 0.5 * (s.pressure[i] + s.pressure[l.b[k]]) < mat.compaction.pressure)
+            onset = e;
+        }
         e_max = e;
-      delta -= compaction_set(e_max, l.d0[k], mat.compaction);
+      }
+      delta -= compaction_set(e_max, l.d0[k], link_compaction(l, k, mat.compaction));
     }
     if (factored)
     {
@@ -387,7 +426,9 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       if (compacting)
       {
         l.compaction[k] = e_max_old;
-        from_set = (D - l.d0[k]) - compaction_set(e_max_old, l.d0[k], mat.compaction);
+        if (pressure_gated)
+          l.compaction_onset[k] = onset_old;
+        from_set = (D - l.d0[k]) - compaction_set(e_max_old, l.d0[k], link_compaction(l, k, mat.compaction));
       }
       const double* va = &p.v[3 * i];
       const double* vb = &p.v[3 * l.b[k]];

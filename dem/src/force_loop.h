@@ -59,7 +59,9 @@ struct ForceScratch
   /// per sphere: sum of K_n (D - D_init) D over its intact links
   /// (Material::rate_mean_tension)
   std::vector<double> stretch;
-  std::vector<double> link_stretch; ///< per link: its term of `stretch`
+  std::vector<double> link_stretch; ///< per link: its term of `stretch` (or of `pressure`)
+  /// per sphere: its links' mean pressure [Pa] (CompactionLaw::pressure)
+  std::vector<double> pressure;
   const std::int32_t* links_for = nullptr; ///< the link array the index was built for
   std::size_t links_size = 0, pairs_version = SIZE_MAX;
   std::size_t bytes() const;

@@ -120,7 +120,11 @@ MaterialFile read_material(const std::filesystem::path& file)
     t.contact_shear_limit = get("contact_shear_limit_pa");
   // optional: compaction (absent: none)
   if (j.contains("compaction_onset"))
+  {
     t.compaction = {get("compaction_onset"), get("compaction_stiffness"), get("compaction_lock")};
+    if (j.contains("compaction_pressure_pa"))
+      t.compaction.pressure = get("compaction_pressure_pa");
+  }
   if (format == "dembridge-material-2")
     read_reinforcement_laws(j, file, m);
   m.lambda = j.value("lambda", 0.0);
@@ -171,6 +175,8 @@ void write_material(const std::filesystem::path& file, const MaterialFile& m)
     j["compaction_onset"] = t.compaction.onset;
     j["compaction_stiffness"] = t.compaction.stiffness;
     j["compaction_lock"] = t.compaction.lock;
+    if (t.compaction.pressure > 0.0)
+      j["compaction_pressure_pa"] = t.compaction.pressure;
   }
   if (m.steel)
     j["steel"] = {{"youngs_modulus_pa", m.steel->youngs_modulus}, {"density_kg_m3", m.steel->density},

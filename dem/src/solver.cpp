@@ -43,6 +43,10 @@ DemSolver::DemSolver(Particles& p, Links& l, const Material& mat, double dt, dou
     l.compaction.assign(l.size(), 0.0);
   else if (!mat.compaction.on())
     l.compaction.clear();
+  if (mat.compaction.gated() && l.compaction_onset.size() != l.size())
+    l.compaction_onset.assign(l.size(), mat.compaction.onset);
+  else if (!mat.compaction.gated())
+    l.compaction_onset.clear();
 }
 
 void DemSolver::set_domain(const std::array<double, 3>& lo, const std::array<double, 3>& hi)

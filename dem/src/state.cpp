@@ -59,6 +59,7 @@ void save_links(const Group& g, const Links& l)
   g.write("weight", l.weight);
   g.write("strength", l.strength);
   g.write("compaction", l.compaction);
+  g.write("compaction_onset", l.compaction_onset);
   g.write("rate", l.rate);
 }
 
@@ -73,6 +74,8 @@ void load_links(const Group& g, Links& l)
     read_same_size(g, name, *v);
   if (g.has("rate")) // (absent from checkpoints without the rate filter)
     read_same_size(g, "rate", l.rate);
+  if (g.has("compaction_onset")) // (absent from checkpoints without a pressure gate)
+    read_same_size(g, "compaction_onset", l.compaction_onset);
   std::vector<std::uint8_t> state;
   g.read("state", state);
   if (state.size() != l.size())

@@ -374,6 +374,10 @@ MaterialSpec read_material_section(Reader& r, const std::filesystem::path& scena
                                Allowed::open(0.0, 1.0),
                                "compaction: the compressive strain where the pores are closed (K_n again), above "
                                "the onset [-]");
+  c.compaction.pressure = r.number("compaction_pressure_pa", c.compaction.pressure,
+                                   Allowed::positive(1e12).or_value(0.0, "no gate"),
+                                   "compaction: a link starts compacting only while its spheres' mean pressure is at "
+                                   "least this [Pa]");
   m.links_per_sphere = r.number("links_per_sphere", f.links_per_sphere, Allowed::positive(100.0),
                                 "mean links per sphere in the bulk (sets lambda) [-]");
   m.material = c; // validated once every key is known (read_scenario)

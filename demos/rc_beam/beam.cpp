@@ -377,7 +377,7 @@ private:
         law.tensile *= _links.strength[k];
       double delta = D - _links.d0[k];
       if (compacting)
-        delta -= compaction_set(_links.compaction[k], _links.d0[k], _c.material.compaction);
+        delta -= compaction_set(_links.compaction[k], _links.d0[k], link_compaction(_links, k, _c.material.compaction));
       const double fn = link_normal_force(delta, _links.delta_max[k], law).fn;
       // the force on b, -fn n + fs, along x; on the right part's sphere
       double fx = -fn * d[0] / D + _links.fs[3 * k];

@@ -138,9 +138,21 @@ struct Links
   /// compaction's history, Material::compaction). Empty: no compaction
   /// (DemSolver sizes it when the material compacts).
   std::vector<double> compaction;
+  /// Each link's compaction onset strain under a pressure gate
+  /// (CompactionLaw::pressure > 0; empty otherwise): the law's onset, raised
+  /// with the link's compressive strain while the gate is shut and the link
+  /// has not started compacting.
+  std::vector<double> compaction_onset;
   std::size_t size() const { return a.size(); }
   std::size_t count(LinkState s) const;
 };
+
+/// Link k's compaction law: the material's, from the link's own onset
+/// under a pressure gate (Links::compaction_onset).
+inline CompactionLaw link_compaction(const Links& l, std::size_t k, const CompactionLaw& c)
+{
+  return l.compaction_onset.empty() ? c : c.from(l.compaction_onset[k]);
+}
 
 /// Interaction surface S_int = pi min(R_a, R_b)^2 of two valid radii [m^2]
 /// (interaction_surface without its checks, for the force loop).

@@ -73,7 +73,19 @@ struct CompactionLaw
   double onset = 0.0;     ///< compressive strain where pores start to collapse [-]; 0 = no compaction
   double stiffness = 1.0; ///< tangent stiffness while compacting / K_n, in (0, 1] [-]
   double lock = 0.0;      ///< compressive strain where the pores are closed, > onset [-]
+  /// Pressure gate [Pa]; 0 = none. With a gate a link starts compacting
+  /// only while the mean pressure of its two spheres is at least this: until
+  /// then its onset follows its compressive strain (Links::compaction_onset),
+  /// so that compaction starts, without a jump of the force, from the strain
+  /// the link has when the gate first opens; its lock strain moves with it.
+  double pressure = 0.0;
   bool on() const { return onset > 0.0; }
+  bool gated() const { return on() && pressure > 0.0; }
+  /// The same law from another onset [-], its lock strain moved as much.
+  CompactionLaw from(double new_onset) const
+  {
+    return {new_onset, stiffness, lock + (new_onset - onset), pressure};
+  }
 };
 
 /// The envelope's compression force over K_n D_init [-] (a strain).

@@ -21,6 +21,7 @@
 ///       "compaction_onset": 0.004,        optional, with the next two: compaction (1.6c)
 ///       "compaction_stiffness": 0.3,
 ///       "compaction_lock": 0.04,
+///       "compaction_pressure_pa": 1.6e7,  optional, with them: its pressure gate
 ///       "steel": {...},                   optional: the bars' steel (bars.h: Steel), keys
 ///                                         youngs_modulus_pa, density_kg_m3, yield_pa,
 ///                                         hardening_pa, rupture_strain, each optional
