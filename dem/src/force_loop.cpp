@@ -1,6 +1,7 @@
 #include "force_loop.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <omp.h>
@@ -174,57 +175,69 @@ inline void pair_output(double* out, const double* n, double fn, const Vec3& fs,
     out[3 + q] = s * nxf[q];
   }
 }
-/// Per sphere, the sum of K_n e D over its intact links, with e =
-/// elongation(k, D) the link's elastic elongation at its length D: each
-/// link's term on the team (w), then the sums in link order by one thread,
-/// so that they do not depend on the thread count.
-template <typename Elongation>
-void sphere_sums(const Particles& p, const Links& l, int nt, std::vector<double>& w, std::vector<double>& out,
-                 Elongation&& elongation)
+/// Per sphere, the sums of K_n e_j D over its intact links, for the N
+/// elongations e_j = elongations(k, D)[j] of link k at its length D, into
+/// *out[j]: each link's terms on the team (w), then the sums in link order
+/// by one thread, so that they do not depend on the thread count.
+template <std::size_t N, typename Elongations>
+void sphere_sums(const Particles& p, const Links& l, int nt, std::vector<double>& w,
+                 const std::array<std::vector<double>*, N>& out, Elongations&& elongations)
 {
   const auto nl = static_cast<std::int64_t>(l.size());
-  w.resize(l.size());
+  w.resize(N * l.size());
 #pragma omp parallel for num_threads(nt) schedule(static)
   for (std::int64_t k = 0; k < nl; ++k)
   {
+    double* wk = &w[N * static_cast<std::size_t>(k)];
     if (l.state[k] != LinkState::intact)
     {
-      w[k] = 0.0;
+      std::fill(wk, wk + N, 0.0);
       continue;
     }
     const double* xa = &p.x[3 * l.a[k]];
     const double* xb = &p.x[3 * l.b[k]];
     const double d[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
     const double D = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    w[k] = l.kn[k] * elongation(static_cast<std::size_t>(k), D) * D;
+    const std::array<double, N> e = elongations(static_cast<std::size_t>(k), D);
+    for (std::size_t j = 0; j < N; ++j)
+      wk[j] = l.kn[k] * e[j] * D;
   }
-  out.assign(p.size(), 0.0);
+  for (auto* o : out)
+    o->assign(p.size(), 0.0);
   for (std::size_t k = 0; k < l.size(); ++k)
-  {
-    out[l.a[k]] += w[k];
-    out[l.b[k]] += w[k];
-  }
+    for (std::size_t j = 0; j < N; ++j)
+    {
+      (*out[j])[l.a[k]] += w[N * k + j];
+      (*out[j])[l.b[k]] += w[N * k + j];
+    }
 }
 
-/// Per sphere, the sum of K_n (D - D_init) D over its intact links: > 0
-/// where its links are on the whole stretched (Material::rate_mean_tension).
-void sphere_stretch(const Particles& p, const Links& l, int nt, std::vector<double>& w, std::vector<double>& out)
+/// The per-sphere sums the gates need, in one pass over the links:
+/// - with `stretch`, the sum of K_n (D - D_init) D over its intact links:
+///   > 0 where its links are on the whole stretched (Material::rate_mean_tension);
+/// - with `pressure`, the mean pressure of its share of the intact links,
+///   from the virial: p_i = -sum(F_n D) / (6 V_i) over its links (each
+///   link's F_n D shared by its two spheres, the trace's third), V_i =
+///   m_i / rho the volume the sphere's mass stands for
+///   (CompactionLaw::pressure); F_n is the normal spring's
+///   K_n (D - D_init - set) at the step's start.
+void sphere_gate_sums(const Particles& p, const Links& l, const Material& mat, int nt, ForceScratch& s, bool stretch,
+                      bool pressure)
 {
-  sphere_sums(p, l, nt, w, out, [&](std::size_t k, double D) { return D - l.d0[k]; });
-}
-
-/// Per sphere, the mean pressure of its share of the intact links, from the
-/// virial: p_i = -sum(F_n D) / (6 V_i) over its links (each link's F_n D
-/// shared by its two spheres, the trace's third), V_i = m_i / rho the
-/// volume the sphere's mass stands for (CompactionLaw::pressure). F_n is
-/// the normal spring's K_n (D - D_init - set) at the step's start.
-void sphere_pressure(const Particles& p, const Links& l, const Material& mat, int nt, std::vector<double>& w,
-                     std::vector<double>& out)
-{
-  sphere_sums(p, l, nt, w, out, [&](std::size_t k, double D)
-              { return D - l.d0[k] - compaction_set(l.compaction[k], l.d0[k], link_compaction(l, k, mat.compaction)); });
-  for (std::size_t i = 0; i < p.size(); ++i)
-    out[i] *= -mat.density / (6.0 * p.m[i]);
+  auto set = [&](std::size_t k)
+  { return compaction_set(l.compaction[k], l.d0[k], link_compaction(l, k, mat.compaction)); };
+  if (stretch && pressure)
+    sphere_sums<2>(p, l, nt, s.link_stretch, {&s.stretch, &s.pressure}, [&](std::size_t k, double D)
+                   { return std::array<double, 2>{D - l.d0[k], D - l.d0[k] - set(k)}; });
+  else if (stretch)
+    sphere_sums<1>(p, l, nt, s.link_stretch, {&s.stretch},
+                   [&](std::size_t k, double D) { return std::array<double, 1>{D - l.d0[k]}; });
+  else if (pressure)
+    sphere_sums<1>(p, l, nt, s.link_stretch, {&s.pressure},
+                   [&](std::size_t k, double D) { return std::array<double, 1>{D - l.d0[k] - set(k)}; });
+  if (pressure)
+    for (std::size_t i = 0; i < p.size(); ++i)
+      s.pressure[i] *= -mat.density / (6.0 * p.m[i]);
 }
 } // namespace
 
@@ -272,12 +285,9 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   const bool filtered = rated && l.rate.size() == l.size();
   const double filter_weight = filtered ? std::min(1.0, dt / mat.rate_filter) : 1.0;
   const bool gated = rated && mat.rate_mean_tension;
-  if (gated)
-    sphere_stretch(p, l, nt, s.link_stretch, s.stretch);
   const bool compacting = mat.compaction.on() && l.compaction.size() == l.size();
   const bool pressure_gated = compacting && mat.compaction.gated() && l.compaction_onset.size() == l.size();
-  if (pressure_gated)
-    sphere_pressure(p, l, mat, nt, s.link_stretch, s.pressure);
+  sphere_gate_sums(p, l, mat, nt, s, gated, pressure_gated);
   // (the set, <= 0, is 0 for a link that never passed the onset)
   auto compacted_touch = [&](std::int32_t k, double rs)
   { return rs + compaction_set(l.compaction[k], l.d0[k], link_compaction(l, k, mat.compaction)); };

@@ -59,7 +59,7 @@ struct ForceScratch
   /// per sphere: sum of K_n (D - D_init) D over its intact links
   /// (Material::rate_mean_tension)
   std::vector<double> stretch;
-  std::vector<double> link_stretch; ///< per link: its term of `stretch` (or of `pressure`)
+  std::vector<double> link_stretch; ///< per link: its terms of `stretch` and `pressure`
   /// per sphere: its links' mean pressure [Pa] (CompactionLaw::pressure)
   std::vector<double> pressure;
   const std::int32_t* links_for = nullptr; ///< the link array the index was built for

@@ -310,11 +310,13 @@ private:
     if (t != _side_t)
     {
       _side_t = t;
-      const double P = _cfg.confinement;
-      _lateral = _confined ? P : std::clamp(-axial_stress(), 0.0, P);
+      const auto w = widths();
+      const double P = _cfg.confinement, h = _cfg.height + mean_uz(_top) - mean_uz(_bottom);
+      _lateral = _confined ? P : std::clamp(-axial_stress(w[0] * w[1]), 0.0, P);
       _confined = _lateral == P;
+      // faces x- and x+ span the width along y, faces y- and y+ along x
       for (int q = 0; q < 4; ++q)
-        _side_f[q] = _lateral * side_area(q);
+        _side_f[q] = _lateral * (w[q / 2 == 0 ? 1 : 0] * h);
     }
     return _side_f[k];
   }
@@ -335,26 +337,22 @@ private:
     const double D = _cfg.diameter;
     return {D + side_displacement(0) + side_displacement(1), D + side_displacement(2) + side_displacement(3)};
   }
-  /// Current area of side face k [m^2]: its width times the platens' distance.
-  double side_area(int k) const
-  {
-    const double h = _cfg.height + mean_uz(_top) - mean_uz(_bottom);
-    return widths()[k / 2 == 0 ? 1 : 0] * h;
-  }
   /// The axial stress [Pa] (> 0 in tension), averaged over the gauge: the
   /// platens' reactions at the last step (see measure()) over the cross
-  /// section, its current one in a triaxial test (the strains reach
-  /// several %).
-  double axial_stress() const
+  /// section `area`.
+  double axial_stress(double area) const
   {
-    double area = _area;
-    if (_cfg.test == "triaxial")
-    {
-      const auto w = widths();
-      area = w[0] * w[1];
-    }
     const double s_top = _solver->reaction("top")[2] / area, s_bot = -_solver->reaction("bottom")[2] / area;
     return s_bot + 13.0 / 48.0 * (s_top - s_bot);
+  }
+  /// The same over the initial section, or the current one in a triaxial
+  /// test (its strains reach several %).
+  double axial_stress() const
+  {
+    if (_cfg.test != "triaxial")
+      return axial_stress(_area);
+    const auto w = widths();
+    return axial_stress(w[0] * w[1]);
   }
 
   void set_up_gauges()
@@ -574,7 +572,7 @@ private:
     // to the top one, and its mean over [H/4, 3H/4] is s_bot + 13/48 (s_top
     // - s_bot). The top platen's stress alone makes E and sigma_t depend on
     // the loading rate (by ~2 % when it is halved).
-    const double s_top = _solver->reaction("top")[2] / _area, s_bot = -_solver->reaction("bottom")[2] / _area;
+    const double f_top = _solver->reaction("top")[2], s_bot = -_solver->reaction("bottom")[2] / _area;
     const double stress = axial_stress();
     const double confining = _lateral; // as applied over the last step (0 but in a triaxial test)
     double ul = 0.0;
@@ -590,7 +588,7 @@ private:
     _conf.push_back(confining);
     track_peak(strain, stress, confining, s_bot);
     if (_csv.is_open() || print)
-      write_point(print, strain, stress, lateral, axial, s_top, confining);
+      write_point(print, strain, stress, lateral, axial, f_top, confining);
     if (frame && _writer)
       _writer->write(_solver->time(), _p, _links);
   }
@@ -638,7 +636,7 @@ private:
       _after_peak = true;
   }
 
-  void write_point(bool print, double strain, double stress, double lateral, double axial, double s_top,
+  void write_point(bool print, double strain, double stress, double lateral, double axial, double f_top,
                    double confining)
   {
     const auto e = _solver->energy();
@@ -648,7 +646,7 @@ private:
            << _solver->reaction("bottom")[2] << ',' << bt << ',' << bs << ',' << e.kinetic << ','
            << e.elastic << ',' << e.softening << ',' << e.breakage << ',' << e.friction << ','
            << e.damping << ',' << e.external_work + e.prescribed_work << ',' << e.imbalance()
-           << ',' << axial << ',' << s_top * _area << ',' << confining << '\n';
+           << ',' << axial << ',' << f_top << ',' << confining << '\n';
     if (print && !_cfg.quiet)
       std::cout << std::scientific << std::setprecision(4) << std::setw(12) << strain
                 << std::setw(15) << stress << std::setw(7) << bt << "/" << std::left
