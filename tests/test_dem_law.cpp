@@ -700,6 +700,7 @@ TEST_CASE("material file: the optional impact keys round trip, absent ones stay 
   m.material.rate_fc = 48e6;
   m.material.rate_max = 100.0;
   m.material.contact_shear_limit = 1.68e8;
+  m.material.rolling_friction = 0.15;
   m.material.rate_cohesion = false;
   m.material.rate_filter = 2e-6;
   m.material.rate_mean_tension = true;
@@ -709,6 +710,7 @@ TEST_CASE("material file: the optional impact keys round trip, absent ones stay 
   CHECK(a.rate_fc == 48e6);
   CHECK(a.rate_max == 100.0);
   CHECK(a.contact_shear_limit == 1.68e8);
+  CHECK(a.rolling_friction == 0.15);
   CHECK(!a.rate_cohesion);
   CHECK(a.rate_filter == 2e-6);
   CHECK(a.rate_mean_tension);
@@ -717,6 +719,7 @@ TEST_CASE("material file: the optional impact keys round trip, absent ones stay 
   const Material b = read_material(dir / "off.json").material;
   CHECK(b.rate_fc == 0.0);
   CHECK(b.contact_shear_limit == 0.0);
+  CHECK(b.rolling_friction == 0.0);
   CHECK(b.rate_cohesion);
   CHECK(b.rate_filter == 0.0);
   CHECK(!b.rate_mean_tension);
@@ -724,4 +727,7 @@ TEST_CASE("material file: the optional impact keys round trip, absent ones stay 
   // the limit checked like every parameter
   m.material.contact_shear_limit = -1.0;
   CHECK_THROWS_WITH(m.material.validate(), Catch::Matchers::Contains("contacts' shear limit"));
+  m.material.contact_shear_limit = 0.0;
+  m.material.rolling_friction = -0.1;
+  CHECK_THROWS_WITH(m.material.validate(), Catch::Matchers::Contains("rolling friction mu_r"));
 }

@@ -42,8 +42,8 @@ double link_energy(const Particles& p, const Links& l, const Material& mat, cons
   return wk * (0.5 * fn * delta + 0.5 * dot3(&l.fs[3 * k], &l.fs[3 * k]) / law.ks);
 }
 
-/// Energy stored in touching contact q: the normal overlap's spring and the
-/// shear spring, times the pair's mean weight.
+/// Energy stored in touching contact q: the normal overlap's spring, the
+/// shear spring and the rolling spring, times the pair's mean weight.
 double contact_energy(const Particles& p, const Links& l, const NeighbourList& nl, const Material& mat,
                       const ContactFactors& cf, bool compacting, std::size_t q)
 {
@@ -62,6 +62,12 @@ double contact_energy(const Particles& p, const Links& l, const NeighbourList& n
   const double kn = mat.youngs_modulus * interaction_surface(p.r[i], p.r[j]) / rs * cf.cn;
   const double wq = p.weight.empty() ? 1.0 : 0.5 * (p.weight[i] + p.weight[j]);
   double e = wq * 0.5 * dot3(&nl.fs[3 * q], &nl.fs[3 * q]) / (kn * cf.cs);
+  if (nl.rolling())
+  {
+    // the rolling spring, k_r = K_s R*^2 (method.md 1.7d)
+    const double r_star = p.r[i] * p.r[j] / rs;
+    e += wq * 0.5 * dot3(&nl.mr[3 * q], &nl.mr[3 * q]) / (kn * cf.cs * r_star * r_star);
+  }
   if (gap > 0.0)
     e += wq * 0.5 * kn * gap * gap;
   return e;

@@ -7,6 +7,7 @@
 #include <omp.h>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 
 #include "threads.h"
 
@@ -59,17 +60,21 @@ inline void branches(const double* rec, std::size_t i, std::span<const std::int3
 
 /// One sweep over the items of `ix` by the calling thread (call from every
 /// thread of the team; see SweepIndex). compute(i, k, out) writes item k's
-/// force on b and torque factor into out[6] and returns false if the item
-/// acts no more (out zeroed). f and q receive the sums for this thread's
+/// force on b and torque factor into out[W] and returns false if the item
+/// acts no more (out zeroed): W = 6, the force on b and one torque factor q
+/// for both spheres (a shear force's torques, t = R q); W = 9, the force on
+/// b, then q_a and q_b (a moment pair on top of the shear's torques). f and q receive the sums for this thread's
 /// spheres, ix.bounds[t] to ix.bounds[t + 1]; `reset` zeroes them first.
 /// The sums are the same bit for bit whatever the thread count: into each
 /// sphere, the items of lower spheres in item order, then its own.
 /// prepare(i, k0, k1, g) fills the `prepared` values of the items of sphere
 /// i (reading state only); compute(i, k, g_k, out) then does item k.
-template <typename Prepare, typename Compute>
+template <int W, typename Prepare, typename Compute>
 void sweep(SweepIndex& ix, std::span<const std::int32_t> b, bool reset,
            double* f, double* q, Prepare&& prepare, Compute&& compute)
 {
+  static_assert(W == 6 || W == 9);
+  constexpr int qb = W - 3; // where sphere b's torque factor sits in an output
   const int t = omp_get_thread_num();
   const std::size_t lo = ix.bounds[t], hi = ix.bounds[t + 1];
   const std::int32_t bhi = static_cast<std::int32_t>(hi);
@@ -92,7 +97,7 @@ void sweep(SweepIndex& ix, std::span<const std::int32_t> b, bool reset,
     {
       const std::int32_t i = ix.cross_i[c], k = ix.cross_k[c];
       prepare(static_cast<std::size_t>(i), k, k + 1, g.data());
-      compute(static_cast<std::size_t>(i), k, g.data(), &ix.out[6 * c]);
+      compute(static_cast<std::size_t>(i), k, g.data(), &ix.out[W * c]);
     }
   }
   if (reset)
@@ -105,11 +110,11 @@ void sweep(SweepIndex& ix, std::span<const std::int32_t> b, bool reset,
   for (std::size_t j = lo; j < hi; ++j)
     for (std::int32_t e = ix.in_first[j]; e < ix.in_first[j + 1]; ++e)
     {
-      const double* o = &ix.out[6 * ix.in[e]];
+      const double* o = &ix.out[W * ix.in[e]];
       for (int c = 0; c < 3; ++c)
       {
         f[3 * j + c] += o[c];
-        q[3 * j + c] += o[3 + c];
+        q[3 * j + c] += o[qb + c];
       }
     }
   std::int32_t slot = ix.cross_first[t];
@@ -128,15 +133,15 @@ void sweep(SweepIndex& ix, std::span<const std::int32_t> b, bool reset,
       const std::int32_t jn = b_ahead(b, k);
       __builtin_prefetch(f + 3 * jn, 1);
       __builtin_prefetch(q + 3 * jn, 1);
-      double local[6];
+      double local[W];
       const double* o = local;
       if (j >= bhi)
-        o = &ix.out[6 * slot++];
+        o = &ix.out[W * slot++];
       else if (compute(i, k, &g[prepared * (k - k0)], local))
         for (int c = 0; c < 3; ++c)
         {
           f[3 * j + c] += local[c];
-          q[3 * j + c] += local[3 + c];
+          q[3 * j + c] += local[qb + c];
         }
       else
         continue;
@@ -490,7 +495,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
         r[6] = q.u[2];
         r[7] = q.k;
       }
-      sweep(s.links, l.b, true, f, t, link_prepare, link_force);
+      sweep<6>(s.links, l.b, true, f, t, link_prepare, link_force);
     }
   }
   if (short_team)
@@ -529,10 +534,15 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     s.pairs_version = nl.version();
   }
 
-  // contacts between spheres without an intact link
-  auto contact_force = [&](std::size_t i, std::int32_t q, const double* n, double* out)
+  // contacts between spheres without an intact link; with rolling
+  // resistance (width 9) each also applies a moment pair (law.h, trial_rolling)
+  const bool rolling = mat.rolling_friction > 0.0;
+  if (rolling)
+    nl.keep_rolling();
+  auto contact_force = [&](auto width, std::size_t i, std::int32_t q, const double* n, double* out)
                            __attribute__((always_inline)) -> bool
   {
+    constexpr int W = decltype(width)::value;
     s.pair_slip[q] = 0.0;
     const std::int32_t j = nl.b[q];
     const double D = n[3];
@@ -542,19 +552,26 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     // compaction made)
     const double touch = compacting && nl.link[q] >= 0 ? compacted_touch(nl.link[q], rs) : rs;
     double* fs_old = &nl.fs[3 * q];
+    // the rolling spring: k_r = K_s R*^2 (method.md 1.7d)
+    const double r_star = rad[i] * rad[j] / rs;
     if (D >= touch) // (a listed pair never has an intact link: NeighbourList)
     {
       if (nl.touching[q])
       {
-        // the contact opens: its cap fell to zero, so the shear spring's
-        // energy went by sliding (friction)
+        // the contact opens: its caps fell to zero, so the shear (and
+        // rolling) springs' energy went by sliding (friction)
         const double kn = mat.youngs_modulus * pair_surface(rad[i], rad[j]) / rs * cf.cn;
         const double wq = weighted_spheres ? 0.5 * (p.weight[i] + p.weight[j]) : 1.0;
-        s.pair_slip[q] = wq * 0.5 * (fs_old[0] * fs_old[0] + fs_old[1] * fs_old[1] + fs_old[2] * fs_old[2]) / (kn * cf.cs);
+        double e = 0.5 * dot3(fs_old, fs_old) / (kn * cf.cs);
+        if constexpr (W == 9)
+          e += 0.5 * dot3(&nl.mr[3 * q], &nl.mr[3 * q]) / (kn * cf.cs * r_star * r_star);
+        s.pair_slip[q] = wq * e;
       }
       nl.touching[q] = 0;
       std::fill(fs_old, fs_old + 3, 0.0);
-      std::fill(out, out + 6, 0.0);
+      if constexpr (W == 9)
+        std::fill(&nl.mr[3 * q], &nl.mr[3 * q] + 3, 0.0);
+      std::fill(out, out + W, 0.0);
       return false;
     }
     LinkLaw law = base;
@@ -562,11 +579,12 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     law.kn = mat.youngs_modulus * law.s_int / rs * cf.cn;
     law.ks = law.kn * cf.cs;
     const double fn = contact_normal_force(D, touch, law.kn);
-    const double* n_old = nl.touching[q] ? &nl.n[3 * q] : n;
-    const Vec3 fs_prev = nl.touching[q] ? Vec3{fs_old[0], fs_old[1], fs_old[2]} : Vec3{0, 0, 0};
-    const Vec3 trial = trial_shear(fs_prev, {n_old[0], n_old[1], n_old[2]}, {n[0], n[1], n[2]},
-                                   rotation_minus_identity(load_rotation(rec + record * i)),
-                                   load_rotation(rec + record * j),
+    const bool touched = nl.touching[q];
+    const double* n_old = touched ? &nl.n[3 * q] : n;
+    const Vec3 fs_prev = touched ? Vec3{fs_old[0], fs_old[1], fs_old[2]} : Vec3{0, 0, 0};
+    const Mat3 qa = rotation_minus_identity(load_rotation(rec + record * i));
+    const StepRotation qb = load_rotation(rec + record * j);
+    const Vec3 trial = trial_shear(fs_prev, {n_old[0], n_old[1], n_old[2]}, {n[0], n[1], n[2]}, qa, qb,
                                    rad[i] / rs, law.ks * D);
     const ShearForce sf = contact_shear_cap(trial, fn, law, fs_prev);
     const double wq = weighted_spheres ? 0.5 * (p.weight[i] + p.weight[j]) : 1.0;
@@ -578,17 +596,48 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     }
     nl.touching[q] = 1;
     pair_output(out, n, wq * fn, {wq * sf.fs[0], wq * sf.fs[1], wq * sf.fs[2]}, D, 1.0 / rs);
+    if constexpr (W == 9)
+    {
+      // the moment M on b, -M on a: torque factors q_a = q - M / R_a and
+      // q_b = q + M / R_b (torque = radius times factor)
+      double* m_old = &nl.mr[3 * q];
+      const Vec3 m_prev = touched ? Vec3{m_old[0], m_old[1], m_old[2]} : Vec3{0, 0, 0};
+      const double* wa = &p.w[3 * i];
+      const double* wb = &p.w[3 * j];
+      const double kr = law.ks * r_star * r_star;
+      const Vec3 mt = trial_rolling(m_prev, {n[0], n[1], n[2]}, qa, qb, rad[i] / rs,
+                                    {(wb[0] - wa[0]) * dt, (wb[1] - wa[1]) * dt, (wb[2] - wa[2]) * dt}, kr);
+      const ShearForce rm = contact_rolling_cap(mt, fn, kr, mat.rolling_friction * r_star, m_prev);
+      s.pair_slip[q] += wq * rm.slip_energy;
+      for (int k = 0; k < 3; ++k)
+      {
+        m_old[k] = rm.fs[k];
+        out[6 + k] = out[3 + k] + wq * rm.fs[k] / rad[j];
+        out[3 + k] -= wq * rm.fs[k] / rad[i];
+      }
+    }
     return true;
   };
+  auto contact_prepare = [&](std::size_t i, std::int32_t k0, std::int32_t k1, double* g)
+  { branches(rec, i, nl.b, k0, k1, g); };
 
 #pragma omp parallel num_threads(nt)
   {
     if (omp_get_num_threads() == nt)
     {
-      sweep(s.pairs, nl.b, false, f, t,
-            [&](std::size_t i, std::int32_t k0, std::int32_t k1, double* g)
-            { branches(rec, i, nl.b, k0, k1, g); },
-            contact_force);
+      // (the rolling sweep out of line, so that the pairs' region stays as
+      // small as without it: see dem/CMakeLists.txt)
+      if (rolling)
+        [&]() __attribute__((noinline))
+        {
+          sweep<9>(s.pairs, nl.b, false, f, t, contact_prepare,
+                   [&](std::size_t i, std::int32_t q, const double* n, double* out) __attribute__((always_inline))
+                   { return contact_force(std::integral_constant<int, 9>{}, i, q, n, out); });
+        }();
+      else
+        sweep<6>(s.pairs, nl.b, false, f, t, contact_prepare,
+                 [&](std::size_t i, std::int32_t q, const double* n, double* out) __attribute__((always_inline))
+                 { return contact_force(std::integral_constant<int, 6>{}, i, q, n, out); });
       // torques: each sphere's radius times its summed torque factors
       // (the spheres whose sums this thread's sweep completed)
       const int th = omp_get_thread_num();

@@ -12,6 +12,9 @@
 namespace dembridge::dem
 {
 
+/// The most values an item's output has (a sweep of width 9: force on b, then
+/// the torque factors of a and b).
+constexpr int max_out = 9;
 /// Values per item that a sweep prepares for a whole sphere at once.
 constexpr int prepared = 8;
 /// Doubles per sphere record of the force loop: centre (3), radius, the
@@ -33,7 +36,9 @@ struct SweepIndex
   std::vector<std::int32_t> cross_first; ///< first buffer slot of each thread (T + 1)
   std::vector<std::int32_t> in_first, in; ///< slots of the cross items into sphere b (CSR)
   std::vector<std::int32_t> cross_i, cross_k; ///< per slot: the cross item's sphere a and item
-  std::vector<double> out;              ///< per cross item: force on b (3), torque factor q (3)
+  /// per cross item (max_out values each, a sweep of width W uses W): force
+  /// on b (3), torque factor q (3) or q_a (3) and q_b (3)
+  std::vector<double> out;
   std::vector<std::vector<double>> geometry; ///< per thread: branches of one sphere's items
   int threads = 0;
   /// @throws std::runtime_error if the items are not sorted or out of range

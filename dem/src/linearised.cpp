@@ -97,10 +97,35 @@ double step_from_rows(const std::vector<double>& rt, const std::vector<double>& 
 }
 } // namespace
 
-double critical_time_step(const Particles& p, const Links& l)
+namespace
+{
+// rolling resistance (method.md 1.7d): each link's pair, once a contact,
+// adds the rolling spring k_r = K_s R*^2 between the two rotations, rows
+// k_r / I_i + k_r / sqrt(I_i I_j) (the contacts' K_s equals the links' for
+// the same pair, so the links stand for the contacts the packing can have)
+void rolling_rows(const Particles& p, const Links& l, std::vector<double>& rr)
+{
+  for (std::size_t k = 0; k < l.size(); ++k)
+  {
+    if (l.state[k] != LinkState::intact)
+      continue;
+    const std::int32_t i = l.a[k], j = l.b[k];
+    const double r_star = p.r[i] * p.r[j] / (p.r[i] + p.r[j]);
+    const double kr = (l.weight.empty() ? 1.0 : l.weight[k]) * l.ks[k] * r_star * r_star;
+    const double Ii = p.inertia[i], Ij = p.inertia[j];
+    rr[i] += kr / Ii + kr / std::sqrt(Ii * Ij);
+    rr[j] += kr / Ij + kr / std::sqrt(Ii * Ij);
+  }
+}
+
+} // namespace
+
+double critical_time_step(const Particles& p, const Links& l, bool rolling)
 {
   std::vector<double> rt, rr;
   link_rows(p, l, rt, rr);
+  if (rolling)
+    rolling_rows(p, l, rr);
   return step_from_rows(rt, rr);
 }
 
@@ -121,6 +146,8 @@ void body_rows(const Particles& p, const Links& l, const Material& m, std::vecto
     rt[i] += std::max(kn, ks) / mi + ks * r / std::sqrt(mi * Ii);
     rr[i] += ks * r * r / Ii + ks * r / std::sqrt(Ii * mi);
   }
+  if (m.rolling_friction > 0.0)
+    rolling_rows(p, l, rr);
 }
 } // namespace
 

@@ -118,6 +118,9 @@ MaterialFile read_material(const std::filesystem::path& file)
   // optional: the contacts' Tresca limit (absent: none)
   if (j.contains("contact_shear_limit_pa"))
     t.contact_shear_limit = get("contact_shear_limit_pa");
+  // optional: the contacts' rolling resistance (absent: none)
+  if (j.contains("rolling_friction"))
+    t.rolling_friction = get("rolling_friction");
   // optional: compaction (absent: none)
   if (j.contains("compaction_onset"))
   {
@@ -170,6 +173,8 @@ void write_material(const std::filesystem::path& file, const MaterialFile& m)
     j["rate_cohesion"] = false;
   if (t.contact_shear_limit > 0.0)
     j["contact_shear_limit_pa"] = t.contact_shear_limit;
+  if (t.rolling_friction > 0.0)
+    j["rolling_friction"] = t.rolling_friction;
   if (t.compaction.on())
   {
     j["compaction_onset"] = t.compaction.onset;

@@ -289,12 +289,14 @@ void NeighbourList::build(std::span<const double> x, std::span<const double> r, 
 
 void NeighbourList::replace(std::vector<std::int32_t>&& na, std::vector<std::int32_t>&& nb,
                             std::vector<std::int32_t>&& nl, std::vector<double>&& nfs,
-                            std::vector<double>&& nn, std::vector<std::uint8_t>&& nt)
+                            std::vector<double>&& nmr, std::vector<double>&& nn,
+                            std::vector<std::uint8_t>&& nt)
 {
   a = std::move(na);
   b = std::move(nb);
   link = std::move(nl);
   fs = std::move(nfs);
+  mr = std::move(nmr);
   n = std::move(nn);
   touching = std::move(nt);
   ++_version;
@@ -315,7 +317,7 @@ void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std:
   auto same = [&](std::size_t q, std::size_t p) { return a[q] == na[p] && b[q] == nb[p]; };
   const std::size_t total = (replace_all ? 0 : a.size()) + na.size(); // at most; cut to size below
   std::vector<std::int32_t> oa(total), ob(total), ol(total);
-  std::vector<double> ofs(3 * total, 0.0), on(3 * total, 0.0);
+  std::vector<double> ofs(3 * total, 0.0), on(3 * total, 0.0), omr(_rolling ? 3 * total : 0, 0.0);
   std::vector<std::uint8_t> ot(total, 0);
   auto copy_old = [&](std::size_t q, std::size_t o, std::int32_t link_index)
   {
@@ -323,6 +325,8 @@ void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std:
     ob[o] = b[q];
     ol[o] = link_index;
     std::copy_n(&fs[3 * q], 3, &ofs[3 * o]);
+    if (_rolling)
+      std::copy_n(&mr[3 * q], 3, &omr[3 * o]);
     std::copy_n(&n[3 * q], 3, &on[3 * o]);
     ot[o] = touching[q];
   };
@@ -351,9 +355,12 @@ void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std:
   ob.resize(o);
   ol.resize(o);
   ofs.resize(3 * o);
+  if (_rolling)
+    omr.resize(3 * o);
   on.resize(3 * o);
   ot.resize(o);
-  replace(std::move(oa), std::move(ob), std::move(ol), std::move(ofs), std::move(on), std::move(ot));
+  replace(std::move(oa), std::move(ob), std::move(ol), std::move(ofs), std::move(omr), std::move(on),
+          std::move(ot));
 }
 
 void NeighbourList::add_broken_links(const Links& links, std::span<const std::int32_t> ids)
@@ -369,10 +376,18 @@ void NeighbourList::add_broken_links(const Links& links, std::span<const std::in
   merge(na, nb, ids, {}, false);
 }
 
+void NeighbourList::keep_rolling()
+{
+  if (_rolling)
+    return;
+  _rolling = true;
+  mr.assign(3 * a.size(), 0.0);
+}
+
 std::size_t NeighbourList::bytes() const
 {
   return (a.capacity() + b.capacity() + link.capacity()) * sizeof(std::int32_t)
-         + (fs.capacity() + n.capacity() + _x_build.capacity() + _x_grid.capacity()) * sizeof(double)
+         + (fs.capacity() + mr.capacity() + n.capacity() + _x_build.capacity() + _x_grid.capacity()) * sizeof(double)
          + touching.capacity() + (_grid ? _grid->bytes() : 0);
 }
 

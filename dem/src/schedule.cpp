@@ -59,7 +59,7 @@ void SweepIndex::build(std::size_t np, std::span<const std::int32_t> a,
   std::vector<std::int32_t> fill(in_first.begin(), in_first.end() - 1);
   for (std::size_t s = 0; s < target.size(); ++s) // slots are in item order
     in[fill[target[s]]++] = static_cast<std::int32_t>(s);
-  out.assign(6 * target.size(), 0.0);
+  out.assign(max_out * target.size(), 0.0);
   std::int32_t most = 0;
   for (std::size_t i = 0; i < np; ++i)
     most = std::max(most, first[i + 1] - first[i]);

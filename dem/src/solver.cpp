@@ -117,6 +117,9 @@ void DemSolver::remove_escaped()
       _nl.touching[q] = 0;
       for (int k = 0; k < 3; ++k)
         _nl.fs[3 * q + k] = 0.0;
+      if (_nl.rolling())
+        for (int k = 0; k < 3; ++k)
+          _nl.mr[3 * q + k] = 0.0;
     }
   const double stored = before - stored_energy();
   double kinetic = 0.0;

@@ -105,6 +105,8 @@ void NeighbourList::save(const Group& g) const
   g.write("b", b);
   g.write("link", link);
   g.write("fs", fs);
+  if (_rolling)
+    g.write("mr", mr);
   g.write("n", n);
   g.write("touching", touching);
   g.write("x_build", _x_build);
@@ -129,8 +131,16 @@ void NeighbourList::load(const Group& g)
   g.read("n", n);
   g.read("touching", touching);
   g.read("x_build", _x_build);
+  // the rolling moments, if the run kept them (a run without rolling
+  // resistance writes none)
+  _rolling = g.has("mr");
+  if (_rolling)
+    g.read("mr", mr);
+  else
+    mr.clear();
   const std::size_t m = a.size();
-  if (b.size() != m || link.size() != m || fs.size() != 3 * m || n.size() != 3 * m || touching.size() != m)
+  if (b.size() != m || link.size() != m || fs.size() != 3 * m || n.size() != 3 * m || touching.size() != m
+      || (_rolling && mr.size() != 3 * m))
     g.fail("a", "the pair arrays have inconsistent lengths (file damaged?)");
   // (a checkpoint written before partial updates: its grid was made from x_build)
   if (g.has("x_grid"))

@@ -92,6 +92,9 @@ int main(int argc, char** argv)
   demo::add_number(app, "--contact-shear-limit", m.contact_shear_limit,
                    "Tresca limit of the contacts' friction, beside F_c tan(phi_c) [Pa]",
                    Allowed::positive(1e12).or_value(0.0, "none"));
+  demo::add_number(app, "--rolling-friction", m.rolling_friction,
+                   "rolling resistance of the contacts: mu_r of the cap |M| <= mu_r R* F_c [-]",
+                   Allowed::positive(10.0).or_value(0.0, "none"));
   demo::add_number(app, "--rate-fc", m.rate_fc,
                    "strain-rate effect on the links' T and C0: the Malvar-Ross law's compressive strength f_c [Pa]",
                    Allowed::positive(1e10).or_value(0.0, "no rate effect"));

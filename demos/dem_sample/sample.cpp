@@ -201,7 +201,7 @@ private:
   {
     const SampleConfig& cfg = _cfg;
     const double H = cfg.height;
-    _dt_crit = critical_time_step(_p, _links);
+    _dt_crit = critical_time_step(_p, _links, cfg.material.rolling_friction > 0.0);
     if (cfg.dt > _dt_crit)
     {
       std::ostringstream s;

@@ -355,6 +355,8 @@ MaterialSpec read_material_section(Reader& r, const std::filesystem::path& scena
   c.contact_shear_limit = r.number("contact_shear_limit_pa", c.contact_shear_limit,
                                    Allowed::positive(1e12).or_value(0.0, "no limit"),
                                    "Tresca limit of the contacts' friction: their largest shear stress [Pa]");
+  c.rolling_friction = r.number("rolling_friction", c.rolling_friction, Allowed::positive(10.0).or_value(0.0, "none"),
+                                "rolling resistance of the contacts: mu_r of the cap |M| <= mu_r R* F_c [-]");
   c.rate_fc = r.number("rate_fc_pa", c.rate_fc, Allowed::positive(1e10).or_value(0.0, "no rate effect"),
                        "strain-rate effect: the Malvar-Ross law's compressive strength f_c [Pa]");
   c.rate_cohesion = r.boolean("rate_cohesion", c.rate_cohesion,

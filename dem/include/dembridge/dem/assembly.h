@@ -31,6 +31,10 @@ struct Material
   /// the largest shear stress a contact carries, over its S_int [Pa]; 0 =
   /// none (Coulomb friction at any pressure).
   double contact_shear_limit = 0.0;
+  /// Rolling resistance of the contacts (docs/method.md section 1.7d): the
+  /// coefficient mu_r of the cap |M| <= mu_r R* F_c on the rolling moment,
+  /// R* = R_a R_b / (R_a + R_b) [-]; 0 = none (the spheres roll freely).
+  double rolling_friction = 0.0;
   /// Strain-rate effect on the links' strength (docs/method.md section
   /// 1.6b): 0 = none; else the concrete's compressive strength f_c [Pa] of
   /// the Malvar-Ross law, whose factor of the link's own tensile strain rate

@@ -74,11 +74,14 @@ void stiffness_action(const Particles& p, const Links& l, std::span<const double
 /// assembly (its intact links, with their weights; translations and
 /// rotations), by block Gershgorin on M^-1/2 K M^-1/2; the critical step is
 /// 2/sqrt(bound). Contacts are left out: their stiffness is that of a link of
-/// the same pair.
-double critical_time_step(const Particles& p, const Links& l);
+/// the same pair. With `rolling` (Material::rolling_friction > 0), each
+/// link's pair also holds the rolling spring of its contact, k_r = K_s R*^2
+/// (method.md 1.7d), in the rotation rows.
+double critical_time_step(const Particles& p, const Links& l, bool rolling = false);
 /// The same bound with one rigid-body contact per sphere on top of its
 /// links (body.h: body_contact_stiffness): the step for a run with bodies.
-/// A sphere with no intact link but the body contact still counts.
+/// A sphere with no intact link but the body contact still counts. The
+/// rolling springs count when m.rolling_friction > 0.
 double critical_time_step(const Particles& p, const Links& l, const Material& m);
 /// The same with the bars' elements and bonds (bars.h: add_bar_rows): the
 /// step for a reinforced run, the bar nodes' rows included.

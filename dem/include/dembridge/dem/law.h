@@ -228,6 +228,27 @@ ShearForce contact_shear_force(const Vec3& fs, const Vec3& du_s, double fn, cons
 /// fs_prev: the force of the previous step (for the dissipated energy).
 ShearForce contact_shear_cap(const Vec3& fs_trial, double fn, const LinkLaw& p, const Vec3& fs_prev);
 
+/// Rolling resistance of a contact (docs/method.md section 1.7d; the
+/// elastic-plastic spring of Iwashita and Oda 1998, as in Ai et al. 2011's
+/// "type C" models): a moment M on b (and -M on a) in the tangent plane.
+/// Trial moment of the step, before the cap:
+///   M_trial = P (Rp M_old - k_r dtheta),
+/// with Rp = f_a R_a + f_b R_b the pair's rotation (as trial_shear carries
+/// the shear force), dtheta = (w_b - w_a) dt b's rotation relative to a
+/// over the step and P the projection on the tangent plane of n_new (the
+/// twist about the normal is not resisted). A rigid rotation of the pair
+/// (w_a = w_b) carries the moment with it and adds none.
+/// @param qa R_a - I; @param qb sphere b's rotation; @param fa = R_a / (R_a + R_b);
+/// @param kr rolling stiffness [N m / rad]
+Vec3 trial_rolling(const Vec3& m_old, const Vec3& n_new, const Mat3& qa, const StepRotation& qb,
+                   double fa, const Vec3& dtheta, double kr);
+/// The rolling moment's cap |M| <= mu_r R* F_c (F_c = -fn, the contact's
+/// compression; arm = mu_r R*, R* = R_a R_b / (R_a + R_b)), applied as
+/// contact_shear_cap applies Coulomb's to the shear force, with the same
+/// energy: (M_prev + M_new) . (M_trial - M_new) / (2 k_r) dissipated by
+/// rolling in the step where the cap holds. Returns the moment in `fs`.
+ShearForce contact_rolling_cap(const Vec3& m_trial, double fn, double kr, double arm, const Vec3& m_prev);
+
 /// Torques from a shear force fs acting on b (and -fs on a) at the contact
 /// point, which lies at l_a n from a's centre and -l_b n from b's (n the unit
 /// normal from a to b): t_a = (l_a n) x (-fs) = -l_a n x fs,
@@ -482,6 +503,28 @@ inline ShearForce contact_shear_cap(const Vec3& fs_trial, double fn, const LinkL
     out.slip_energy = 0.5 * e / p.ks;
   }
   return out;
+}
+
+inline Vec3 trial_rolling(const Vec3& m_old, const Vec3& n_new, const Mat3& qa, const StepRotation& qb,
+                          double fa, const Vec3& dtheta, double kr)
+{
+  const Vec3 qva = detail::mul(qa, m_old), qvb = rotation_minus_identity_times(qb, m_old);
+  const double fb = 1.0 - fa;
+  Vec3 r;
+  for (int k = 0; k < 3; ++k)
+    r[k] = m_old[k] + (fa * qva[k] + fb * qvb[k]) - kr * dtheta[k];
+  const double rn = detail::dot(r, n_new);
+  for (int k = 0; k < 3; ++k)
+    r[k] -= rn * n_new[k];
+  return r;
+}
+
+inline ShearForce contact_rolling_cap(const Vec3& m_trial, double fn, double kr, double arm, const Vec3& m_prev)
+{
+  LinkLaw law{};
+  law.ks = kr;
+  law.tan_phi_c = arm;
+  return contact_shear_cap(m_trial, fn, law, m_prev);
 }
 
 inline std::array<Vec3, 2> shear_torques(const Vec3& n, const Vec3& fs, double l_a, double l_b)

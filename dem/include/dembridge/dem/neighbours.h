@@ -153,6 +153,10 @@ public:
   std::size_t partial_builds() const { return _partial; }
   /// Bytes held by the list.
   std::size_t bytes() const;
+  /// From now on the list keeps a rolling moment per pair (mr, zero for the
+  /// pairs listed so far), carried through its changes like fs.
+  void keep_rolling();
+  bool rolling() const { return _rolling; }
   /// The pairs, their contact history and the build state, to a checkpoint.
   void save(const checkpoint::Group& g) const;
   /// Reads what save() wrote (the skin must be the same).
@@ -161,13 +165,16 @@ public:
   std::vector<std::int32_t> a, b;  ///< pairs, a < b, sorted
   std::vector<std::int32_t> link;  ///< index of the pair's (broken) link, or -1; never an intact one
   std::vector<double> fs;          ///< contact shear force on b, (pairs, 3) [N]
+  /// contact rolling moment on b, (pairs, 3) [N m]; empty until
+  /// keep_rolling() (Material::rolling_friction)
+  std::vector<double> mr;
   std::vector<double> n;           ///< contact normal at the last step, (pairs, 3)
   std::vector<std::uint8_t> touching; ///< 1 while the pair is in contact
 
 private:
   void replace(std::vector<std::int32_t>&& na, std::vector<std::int32_t>&& nb,
-               std::vector<std::int32_t>&& nl, std::vector<double>&& nfs, std::vector<double>&& nn,
-               std::vector<std::uint8_t>&& nt);
+               std::vector<std::int32_t>&& nl, std::vector<double>&& nfs, std::vector<double>&& nmr,
+               std::vector<double>&& nn, std::vector<std::uint8_t>&& nt);
   void build(std::span<const double> x, std::span<const double> r, const Links& links,
              std::span<const std::uint8_t> skip);
   void search_movers(std::span<const double> x, std::span<const double> r, const Links& links,
@@ -180,6 +187,7 @@ private:
   std::vector<double> _x_grid;     // the positions the grid was made from
   double _cell = 0.0;              // the grid's cell size at the last build
   bool _stale = false;             // rebuild at the next update
+  bool _rolling = false;           // mr is kept
   std::vector<std::uint8_t> _skip; // the spheres left out of the last build
   std::optional<CellGrid> _grid;
 };
