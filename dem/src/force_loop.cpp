@@ -535,8 +535,10 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   }
 
   // contacts between spheres without an intact link; with rolling
-  // resistance (width 9) each also applies a moment pair (law.h, trial_rolling)
-  const bool rolling = mat.rolling_friction > 0.0;
+  // resistance (width 9) each also applies a moment pair (law.h,
+  // trial_rolling). A list that carries moments keeps the law (with mu_r =
+  // 0 its cap is zero: the moments go, their energy booked as friction).
+  const bool rolling = mat.rolling_friction > 0.0 || nl.rolling();
   if (rolling)
     nl.keep_rolling();
   auto contact_force = [&](auto width, std::size_t i, std::int32_t q, const double* n, double* out)
@@ -562,10 +564,10 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
         // rolling) springs' energy went by sliding (friction)
         const double kn = mat.youngs_modulus * pair_surface(rad[i], rad[j]) / rs * cf.cn;
         const double wq = weighted_spheres ? 0.5 * (p.weight[i] + p.weight[j]) : 1.0;
-        double e = 0.5 * dot3(fs_old, fs_old) / (kn * cf.cs);
+        double e = wq * 0.5 * dot3(fs_old, fs_old) / (kn * cf.cs);
         if constexpr (W == 9)
-          e += 0.5 * dot3(&nl.mr[3 * q], &nl.mr[3 * q]) / (kn * cf.cs * r_star * r_star);
-        s.pair_slip[q] = wq * e;
+          e += wq * 0.5 * dot3(&nl.mr[3 * q], &nl.mr[3 * q]) / (kn * cf.cs * r_star * r_star);
+        s.pair_slip[q] = e;
       }
       nl.touching[q] = 0;
       std::fill(fs_old, fs_old + 3, 0.0);
