@@ -4,6 +4,7 @@
 #include "dembridge/dem/assembly.h"
 #include "dembridge/dem/skin.h"
 #include "dembridge/dem/solver.h"
+#include "dem_lattice.h"
 
 #include <catch2/catch.hpp>
 #include <omp.h>
@@ -24,20 +25,7 @@ namespace
 {
 /// n^3 spheres on a jittered cubic lattice of spacing 2 mm, radii in
 /// [0.8, 1.0] mm (deterministic).
-Particles lattice(int n, unsigned seed = 7)
-{
-  std::mt19937 gen(seed);
-  std::uniform_real_distribution<double> jit(-0.1e-3, 0.1e-3), rad(0.8e-3, 1.0e-3);
-  std::vector<double> x, r;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      for (int k = 0; k < n; ++k)
-      {
-        x.insert(x.end(), {2e-3 * i + jit(gen), 2e-3 * j + jit(gen), 2e-3 * k + jit(gen)});
-        r.push_back(rad(gen));
-      }
-  return make_particles(x, r, 2400.0, 0.6);
-}
+Particles lattice(int n, unsigned seed = 7) { return testing::jittered_lattice(n, 2e-3, 0.1e-3, seed); }
 
 Material concrete()
 {

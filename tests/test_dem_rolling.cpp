@@ -3,6 +3,7 @@
 #include "dembridge/dem/law.h"
 #include "dembridge/dem/solver.h"
 #include "dembridge/dem/stiffness.h"
+#include "dem_lattice.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -19,20 +20,7 @@ Mat3 minus_identity(const Vec3& th) { return rotation_minus_identity(step_rotati
 
 /// Spheres of radii 0.8-1 mm on a jittered lattice of spacing 1.7 mm: they
 /// overlap their neighbours.
-Particles packed(int n)
-{
-  std::mt19937 gen(5);
-  std::uniform_real_distribution<double> jit(-0.05e-3, 0.05e-3), rad(0.8e-3, 1.0e-3);
-  std::vector<double> x, r;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      for (int k = 0; k < n; ++k)
-      {
-        x.insert(x.end(), {1.7e-3 * i + jit(gen), 1.7e-3 * j + jit(gen), 1.7e-3 * k + jit(gen)});
-        r.push_back(rad(gen));
-      }
-  return make_particles(x, r, 2400.0, 0.6);
-}
+Particles packed(int n) { return testing::jittered_lattice(n, 1.7e-3, 0.05e-3, 5); }
 
 Material rolling_concrete(double mu_r)
 {
