@@ -1198,3 +1198,70 @@ TEST_CASE("restart: a run continued from a checkpoint is the uninterrupted run b
   }
   fs::remove(file);
 }
+
+TEST_CASE("neighbour list: a deferred search merged with the links broken after it equals the two "
+          "merges one after the other",
+          "[dem]")
+{
+  // Two lists follow the same spheres; links break between the search and
+  // add_broken_links (as in the force loop). One merges the movers' pairs at
+  // once and the broken links' after; the other defers the search and
+  // merges both in one pass. The lists must be the same, histories
+  // (shear force, rolling moment, normal, touching) included, bit for bit.
+  auto p = lattice(6);
+  const double skin = 0.2e-3;
+  Material m = concrete();
+  Links l = create_links(p, 1.05, m);
+  REQUIRE(l.size() > 100);
+  NeighbourList eager(skin), deferred(skin);
+  eager.keep_rolling();
+  deferred.keep_rolling();
+  eager.update(p.x, p.r, l);
+  deferred.update(p.x, p.r, l, {}, true);
+  CHECK(!deferred.pending()); // the first call builds the whole list
+  std::mt19937 gen(5);
+  std::uniform_int_distribution<std::size_t> pick(0, p.size() - 1), pick_link(0, l.size() - 1);
+  std::uniform_real_distribution<double> step(-0.2 * skin, 0.2 * skin);
+  std::size_t differ = 0, pending_seen = 0, broken_with_search = 0;
+  for (int s = 0; s < 300; ++s)
+  {
+    for (NeighbourList* nl : {&eager, &deferred})
+      for (std::size_t q = 0; q < nl->size(); ++q)
+      {
+        nl->fs[3 * q] = nl->a[q] * 1000.0 + nl->b[q];
+        nl->mr[3 * q + 2] = nl->b[q] - 0.5 * nl->a[q];
+        nl->n[3 * q + 1] = -nl->fs[3 * q];
+        nl->touching[q] = (nl->a[q] + nl->b[q]) % 2;
+      }
+    for (int k = 0; k < 8; ++k) // a few spheres jump
+    {
+      const std::size_t i = pick(gen);
+      for (int c = 0; c < 3; ++c)
+        p.x[3 * i + c] += step(gen);
+    }
+    eager.update(p.x, p.r, l);
+    deferred.update(p.x, p.r, l, {}, true);
+    pending_seen += deferred.pending();
+    std::vector<std::int32_t> ids; // links breaking now, sorted
+    for (int k = 0; k < 2; ++k)
+      if (const std::size_t q = pick_link(gen); l.state[q] == LinkState::intact)
+      {
+        l.state[q] = LinkState::broken_tension;
+        ids.push_back(static_cast<std::int32_t>(q));
+      }
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    broken_with_search += deferred.pending() && !ids.empty();
+    eager.add_broken_links(l, ids);
+    deferred.add_broken_links(l, ids);
+    CHECK(!deferred.pending());
+    differ += eager.a != deferred.a || eager.b != deferred.b || eager.link != deferred.link
+              || eager.fs != deferred.fs || eager.mr != deferred.mr || eager.n != deferred.n
+              || eager.touching != deferred.touching;
+  }
+  CHECK(differ == 0);
+  // the case the deferral is for happened often
+  CHECK(pending_seen > 100);
+  CHECK(broken_with_search > 50);
+  CHECK(eager.partial_builds() == deferred.partial_builds());
+}

@@ -525,8 +525,10 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     c.breakage += e;
     s.broken_ids.push_back(k);
   }
+  const double merge_start = omp_get_wtime();
   nl.add_broken_links(l, s.broken_ids);
   const double contacts_start = omp_get_wtime();
+  c.neighbour_seconds += contacts_start - merge_start;
   if (s.pairs_version != nl.version() || s.pairs.first.size() != np + 1 || s.pairs.threads != nt)
   {
     s.pairs.build(np, nl.a, nl.b, nt);

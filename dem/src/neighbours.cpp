@@ -91,8 +91,10 @@ NeighbourList::NeighbourList(double skin) : _skin(skin)
 }
 
 bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
-                           const Links& links, std::span<const std::uint8_t> skip)
+                           const Links& links, std::span<const std::uint8_t> skip, bool defer)
 {
+  if (_pending) // a deferred search nobody merged: merge it first
+    add_broken_links(links, {});
   const std::size_t np = r.size();
   if (_builds == 0 || _x_build.size() != x.size() || _stale)
   {
@@ -123,7 +125,7 @@ bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
   if (movers.size() > np / 8)
     build(x, r, links, skip);
   else
-    search_movers(x, r, links, movers);
+    search_movers(x, r, links, movers, defer);
   return true;
 }
 
@@ -177,14 +179,18 @@ std::int32_t find_link(const Links& links, std::int32_t a, std::int32_t b)
 } // namespace
 
 void NeighbourList::search_movers(std::span<const double> x, std::span<const double> r,
-                                  const Links& links, const std::vector<std::int32_t>& movers)
+                                  const Links& links, const std::vector<std::int32_t>& movers,
+                                  bool defer)
 {
   const std::size_t np = r.size();
   _grid.emplace(x, _cell, _skip);
   const CellGrid& grid = *_grid;
-  std::vector<std::uint8_t> moving(np, 0);
+  if (_moving.size() != np)
+    _moving.assign(np, 0);
+  _movers = movers;
   for (auto m : movers)
-    moving[m] = 1;
+    _moving[m] = 1;
+  const std::vector<std::uint8_t>& moving = _moving;
   // each mover's pairs with every sphere (a pair of two movers found by the
   // lower one), as (a, b, link); each thread a contiguous block of movers
   std::vector<Found> chunk(omp_get_max_threads());
@@ -220,10 +226,22 @@ void NeighbourList::search_movers(std::span<const double> x, std::span<const dou
     order[k] = k;
   std::sort(order.begin(), order.end(), [&](std::size_t u, std::size_t v)
             { return add.a[u] < add.a[v] || (add.a[u] == add.a[v] && add.b[u] < add.b[v]); });
-  Found sorted;
-  for (const std::size_t k : order)
-    sorted.push(add.a[k], add.b[k], add.link[k]);
-  merge(sorted.a, sorted.b, sorted.link, moving, false);
+  _pend_a.resize(order.size());
+  _pend_b.resize(order.size());
+  _pend_link.resize(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k)
+  {
+    _pend_a[k] = add.a[order[k]];
+    _pend_b[k] = add.b[order[k]];
+    _pend_link[k] = add.link[order[k]];
+  }
+  if (defer)
+    _pending = true;
+  else
+  {
+    merge(_pend_a, _pend_b, _pend_link, _moving, false);
+    end_search();
+  }
   for (auto m : movers)
     for (int k = 0; k < 3; ++k)
       _x_build[3 * m + k] = x[3 * m + k];
@@ -287,19 +305,26 @@ void NeighbourList::build(std::span<const double> x, std::span<const double> r, 
   ++_builds;
 }
 
-void NeighbourList::replace(std::vector<std::int32_t>&& na, std::vector<std::int32_t>&& nb,
-                            std::vector<std::int32_t>&& nl, std::vector<double>&& nfs,
-                            std::vector<double>&& nmr, std::vector<double>&& nn,
-                            std::vector<std::uint8_t>&& nt)
+void NeighbourList::end_search()
 {
-  a = std::move(na);
-  b = std::move(nb);
-  link = std::move(nl);
-  fs = std::move(nfs);
-  mr = std::move(nmr);
-  n = std::move(nn);
-  touching = std::move(nt);
-  ++_version;
+  for (auto m : _movers)
+    _moving[m] = 0;
+  _movers.clear();
+  _pending = false;
+}
+
+void NeighbourList::copy_pairs(std::size_t q0, std::size_t q1, std::size_t o)
+{
+  if (q1 <= q0)
+    return;
+  std::copy(a.begin() + q0, a.begin() + q1, _spare_a.begin() + o);
+  std::copy(b.begin() + q0, b.begin() + q1, _spare_b.begin() + o);
+  std::copy(link.begin() + q0, link.begin() + q1, _spare_link.begin() + o);
+  std::copy(fs.begin() + 3 * q0, fs.begin() + 3 * q1, _spare_fs.begin() + 3 * o);
+  if (_rolling)
+    std::copy(mr.begin() + 3 * q0, mr.begin() + 3 * q1, _spare_mr.begin() + 3 * o);
+  std::copy(n.begin() + 3 * q0, n.begin() + 3 * q1, _spare_n.begin() + 3 * o);
+  std::copy(touching.begin() + q0, touching.begin() + q1, _spare_touching.begin() + o);
 }
 
 void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std::int32_t> nb,
@@ -310,70 +335,132 @@ void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std:
   // listed pair of a mover (of any sphere with replace_all) is dropped
   // unless it is among the new ones, and then keeps its history (a touching
   // pair always is: its gap is below the skin); a new pair already listed
-  // keeps the listed one's history. Written into arrays of the largest size
-  // the list can have, then cut: no growth in the step loop.
-  auto drops = [&](std::size_t q) { return replace_all || (!moving.empty() && (moving[a[q]] || moving[b[q]])); };
-  auto before = [&](std::size_t q, std::size_t p) { return a[q] < na[p] || (a[q] == na[p] && b[q] < nb[p]); };
-  auto same = [&](std::size_t q, std::size_t p) { return a[q] == na[p] && b[q] == nb[p]; };
-  const std::size_t total = (replace_all ? 0 : a.size()) + na.size(); // at most; cut to size below
-  std::vector<std::int32_t> oa(total), ob(total), ol(total);
-  std::vector<double> ofs(3 * total, 0.0), on(3 * total, 0.0), omr(_rolling ? 3 * total : 0, 0.0);
-  std::vector<std::uint8_t> ot(total, 0);
-  auto copy_old = [&](std::size_t q, std::size_t o, std::int32_t link_index)
-  {
-    oa[o] = a[q];
-    ob[o] = b[q];
-    ol[o] = link_index;
-    std::copy_n(&fs[3 * q], 3, &ofs[3 * o]);
-    if (_rolling)
-      std::copy_n(&mr[3 * q], 3, &omr[3 * o]);
-    std::copy_n(&n[3 * q], 3, &on[3 * o]);
-    ot[o] = touching[q];
-  };
+  // keeps the listed one's history. The listed pairs between two new ones
+  // are copied as runs; the new list is written into the spare arrays,
+  // then swapped with the list.
+  const std::size_t m = a.size();
+  const std::size_t total = (replace_all ? 0 : m) + na.size(); // at most; cut to size below
+  _spare_a.resize(total);
+  _spare_b.resize(total);
+  _spare_link.resize(total);
+  _spare_fs.resize(3 * total);
+  _spare_mr.resize(_rolling ? 3 * total : 0);
+  _spare_n.resize(3 * total);
+  _spare_touching.resize(total);
   std::size_t o = 0;
-  for (std::size_t q = 0, p = 0; q < a.size() || p < na.size();)
+  // the listed pairs [q0, q1) that stay, copied in runs
+  auto keep = [&](std::size_t q0, std::size_t q1)
   {
-    if (p == na.size() || (q < a.size() && before(q, p)))
+    if (replace_all)
+      return;
+    std::size_t run = q0;
+    if (!moving.empty())
+      for (std::size_t q = q0; q < q1; ++q)
+        if (moving[a[q]] || moving[b[q]])
+        {
+          copy_pairs(run, q, o);
+          o += q - run;
+          run = q + 1;
+        }
+    copy_pairs(run, q1, o);
+    o += q1 - run;
+  };
+  std::size_t q = 0;
+  for (std::size_t p = 0; p < na.size(); ++p)
+  {
+    // the first listed pair at or after (na[p], nb[p]), from q: a galloping
+    // search, so that a dense merge steps and a sparse one jumps
+    auto less = [&](std::size_t k) { return a[k] < na[p] || (a[k] == na[p] && b[k] < nb[p]); };
+    std::size_t lo = q, hi = q, step = 1;
+    while (hi < m && less(hi))
     {
-      if (!drops(q))
-        copy_old(q, o++, link[q]);
-      ++q;
-      continue;
+      lo = hi + 1;
+      hi += step;
+      step *= 2;
     }
-    if (q < a.size() && same(q, p))
-      copy_old(q++, o, nlink[p]);
+    hi = std::min(hi, m);
+    while (lo < hi)
+    {
+      const std::size_t mid = lo + (hi - lo) / 2;
+      if (less(mid))
+        lo = mid + 1;
+      else
+        hi = mid;
+    }
+    keep(q, lo);
+    q = lo;
+    if (q < m && a[q] == na[p] && b[q] == nb[p])
+    {
+      copy_pairs(q, q + 1, o);
+      ++q;
+    }
     else
     {
-      oa[o] = na[p];
-      ob[o] = nb[p];
-      ol[o] = nlink[p];
+      _spare_a[o] = na[p];
+      _spare_b[o] = nb[p];
+      std::fill_n(&_spare_fs[3 * o], 3, 0.0);
+      if (_rolling)
+        std::fill_n(&_spare_mr[3 * o], 3, 0.0);
+      std::fill_n(&_spare_n[3 * o], 3, 0.0);
+      _spare_touching[o] = 0;
     }
+    _spare_link[o] = nlink[p];
     ++o;
-    ++p;
   }
-  oa.resize(o);
-  ob.resize(o);
-  ol.resize(o);
-  ofs.resize(3 * o);
+  keep(q, m);
+  _spare_a.resize(o);
+  _spare_b.resize(o);
+  _spare_link.resize(o);
+  _spare_fs.resize(3 * o);
   if (_rolling)
-    omr.resize(3 * o);
-  on.resize(3 * o);
-  ot.resize(o);
-  replace(std::move(oa), std::move(ob), std::move(ol), std::move(ofs), std::move(omr), std::move(on),
-          std::move(ot));
+    _spare_mr.resize(3 * o);
+  _spare_n.resize(3 * o);
+  _spare_touching.resize(o);
+  a.swap(_spare_a);
+  b.swap(_spare_b);
+  link.swap(_spare_link);
+  fs.swap(_spare_fs);
+  mr.swap(_spare_mr);
+  n.swap(_spare_n);
+  touching.swap(_spare_touching);
+  ++_version;
 }
 
 void NeighbourList::add_broken_links(const Links& links, std::span<const std::int32_t> ids)
 {
-  if (ids.empty())
+  if (!_pending && ids.empty())
     return;
-  std::vector<std::int32_t> na(ids.size()), nb(ids.size());
-  for (std::size_t k = 0; k < ids.size(); ++k)
+  // the broken links' pairs joined with a deferred search's (both sorted by
+  // (a, b); a pair found by the search had no intact link then, so none is
+  // in both)
+  std::vector<std::int32_t> na, nb, nl;
+  na.reserve(_pend_a.size() + ids.size());
+  nb.reserve(na.capacity());
+  nl.reserve(na.capacity());
+  const std::size_t np = _pending ? _pend_a.size() : 0;
+  for (std::size_t u = 0, k = 0; u < np || k < ids.size();)
   {
-    na[k] = links.a[ids[k]];
-    nb[k] = links.b[ids[k]];
+    const bool take_link = u == np || (k < ids.size() && (links.a[ids[k]] < _pend_a[u]
+                                                         || (links.a[ids[k]] == _pend_a[u] && links.b[ids[k]] <= _pend_b[u])));
+    if (take_link)
+    {
+      const std::int32_t i = links.a[ids[k]], j = links.b[ids[k]];
+      if (u < np && _pend_a[u] == i && _pend_b[u] == j)
+        ++u;
+      na.push_back(i);
+      nb.push_back(j);
+      nl.push_back(ids[k++]);
+    }
+    else
+    {
+      na.push_back(_pend_a[u]);
+      nb.push_back(_pend_b[u]);
+      nl.push_back(_pend_link[u++]);
+    }
   }
-  merge(na, nb, ids, {}, false);
+  merge(na, nb, nl, _pending ? std::span<const std::uint8_t>(_moving) : std::span<const std::uint8_t>(), false);
+  if (_pending)
+    end_search();
 }
 
 void NeighbourList::keep_rolling()
@@ -386,9 +473,14 @@ void NeighbourList::keep_rolling()
 
 std::size_t NeighbourList::bytes() const
 {
-  return (a.capacity() + b.capacity() + link.capacity()) * sizeof(std::int32_t)
-         + (fs.capacity() + mr.capacity() + n.capacity() + _x_build.capacity() + _x_grid.capacity()) * sizeof(double)
-         + touching.capacity() + (_grid ? _grid->bytes() : 0);
+  return (a.capacity() + b.capacity() + link.capacity() + _spare_a.capacity() + _spare_b.capacity()
+          + _spare_link.capacity() + _pend_a.capacity() + _pend_b.capacity() + _pend_link.capacity()
+          + _movers.capacity())
+             * sizeof(std::int32_t)
+         + (fs.capacity() + mr.capacity() + n.capacity() + _spare_fs.capacity() + _spare_mr.capacity()
+            + _spare_n.capacity() + _x_build.capacity() + _x_grid.capacity())
+             * sizeof(double)
+         + touching.capacity() + _spare_touching.capacity() + _moving.capacity() + (_grid ? _grid->bytes() : 0);
 }
 
 } // namespace dembridge::dem

@@ -101,6 +101,8 @@ constexpr std::array booked_energies{
 
 void NeighbourList::save(const Group& g) const
 {
+  if (_pending)
+    throw std::logic_error("neighbour list: saved with a deferred search not merged (add_broken_links)");
   g.write("a", a);
   g.write("b", b);
   g.write("link", link);

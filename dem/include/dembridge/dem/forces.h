@@ -32,6 +32,10 @@ struct ForceCounters
   /// Wall time of the sphere contacts' part of the calls so far [s]: their
   /// pairs' index and sweep (timing only: not in a checkpoint).
   double contact_seconds = 0.0;
+  /// Wall time of the neighbour list's changes in the calls so far [s]: the
+  /// broken links' pairs (and a deferred search's) merged into it (timing
+  /// only: not in a checkpoint).
+  double neighbour_seconds = 0.0;
 };
 
 /// Computes forces and torques on all particles from the intact links and

@@ -126,8 +126,14 @@ public:
   /// Pairs joined by an intact link are left out (the link acts there); a
   /// pair whose link is broken is listed, with its link index, like any
   /// other.
+  ///
+  /// With `defer`, a search of the movers alone keeps their new pairs aside:
+  /// the list changes at the next add_broken_links(), which merges them with
+  /// the pairs of the links broken in between, in one pass over the list
+  /// (the force loop breaks links between the two calls). The list is the
+  /// same as with two merges; it is out of date between the two calls.
   bool update(std::span<const double> x, std::span<const double> r, const Links& links,
-              std::span<const std::uint8_t> skip = {});
+              std::span<const std::uint8_t> skip = {}, bool defer = false);
   /// How far a sphere searched again moves from where it was searched [skin].
   static constexpr double mover_share = 0.3;
   /// The next update() rebuilds (spheres were removed from the computation).
@@ -135,8 +141,11 @@ public:
 
   /// Adds the pairs of links that have just broken (sorted by link index,
   /// hence by (a, b)), with no contact history, so a contact can take over
-  /// within the same step; pairs already listed are skipped.
+  /// within the same step; pairs already listed are skipped. Merges a
+  /// deferred search's pairs too (update()), even when `ids` is empty.
   void add_broken_links(const Links& links, std::span<const std::int32_t> ids);
+  /// A deferred search waits for add_broken_links().
+  bool pending() const { return _pending; }
 
   std::size_t size() const { return a.size(); }
   std::size_t builds() const { return _builds; }
@@ -172,15 +181,14 @@ public:
   std::vector<std::uint8_t> touching; ///< 1 while the pair is in contact
 
 private:
-  void replace(std::vector<std::int32_t>&& na, std::vector<std::int32_t>&& nb,
-               std::vector<std::int32_t>&& nl, std::vector<double>&& nfs, std::vector<double>&& nmr,
-               std::vector<double>&& nn, std::vector<std::uint8_t>&& nt);
   void build(std::span<const double> x, std::span<const double> r, const Links& links,
              std::span<const std::uint8_t> skip);
   void search_movers(std::span<const double> x, std::span<const double> r, const Links& links,
-                     const std::vector<std::int32_t>& movers);
+                     const std::vector<std::int32_t>& movers, bool defer);
   void merge(std::span<const std::int32_t> na, std::span<const std::int32_t> nb,
              std::span<const std::int32_t> nlink, std::span<const std::uint8_t> moving, bool replace_all);
+  void copy_pairs(std::size_t q0, std::size_t q1, std::size_t o);
+  void end_search();
   double _skin;
   std::size_t _builds = 0, _version = 0, _partial = 0;
   std::vector<double> _x_build;    // where each sphere was last searched
@@ -190,6 +198,17 @@ private:
   bool _rolling = false;           // mr is kept
   std::vector<std::uint8_t> _skip; // the spheres left out of the last build
   std::optional<CellGrid> _grid;
+  // the movers of the last search (flag per sphere, cleared by end_search)
+  std::vector<std::uint8_t> _moving;
+  std::vector<std::int32_t> _movers;
+  // a deferred search's new pairs, sorted by (a, b)
+  std::vector<std::int32_t> _pend_a, _pend_b, _pend_link;
+  bool _pending = false;
+  // merge() writes the new list here, then swaps it with the list (the
+  // arrays keep their capacity: no allocation once sized)
+  std::vector<std::int32_t> _spare_a, _spare_b, _spare_link;
+  std::vector<double> _spare_fs, _spare_mr, _spare_n;
+  std::vector<std::uint8_t> _spare_touching;
 };
 
 } // namespace dembridge::dem
