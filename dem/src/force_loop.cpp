@@ -182,16 +182,11 @@ inline void pair_output(double* out, const double* n, double fn, const Vec3& fs,
 }
 /// Per sphere, the sums of K_n e_j D over its intact links, for the N
 /// elongations e_j = elongations(k, D)[j] of link k at its length D, into
-/// *out[j]: each link's terms on the team (w), then each sphere's sum on the
-/// team, over its links in link order: those where it is b (their a is
-/// lower, so they come first), then those where it is a. That is the order
-/// of a serial pass over the links, so the sums do not depend on the thread
-/// count. `first` and `in_first`/`in_links` index the links by a and by b.
+/// *out[j]: each link's terms on the team (w), then the sums in link order
+/// by one thread, so that they do not depend on the thread count.
 template <std::size_t N, typename Elongations>
 void sphere_sums(const Particles& p, const Links& l, int nt, std::vector<double>& w,
-                 const std::array<std::vector<double>*, N>& out, const std::vector<std::int32_t>& first,
-                 const std::vector<std::int32_t>& in_first, const std::vector<std::int32_t>& in_links,
-                 Elongations&& elongations)
+                 const std::array<std::vector<double>*, N>& out, Elongations&& elongations)
 {
   const auto nl = static_cast<std::int64_t>(l.size());
   w.resize(N * l.size());
@@ -213,21 +208,13 @@ void sphere_sums(const Particles& p, const Links& l, int nt, std::vector<double>
       wk[j] = l.kn[k] * e[j] * D;
   }
   for (auto* o : out)
-    o->resize(p.size());
-  const auto np = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for num_threads(nt) schedule(static)
-  for (std::int64_t i = 0; i < np; ++i)
-  {
-    std::array<double, N> sum{};
-    for (std::int32_t q = in_first[i]; q < in_first[i + 1]; ++q)
-      for (std::size_t j = 0; j < N; ++j)
-        sum[j] += w[N * in_links[q] + j];
-    for (std::int32_t k = first[i]; k < first[i + 1]; ++k)
-      for (std::size_t j = 0; j < N; ++j)
-        sum[j] += w[N * k + j];
+    o->assign(p.size(), 0.0);
+  for (std::size_t k = 0; k < l.size(); ++k)
     for (std::size_t j = 0; j < N; ++j)
-      (*out[j])[i] = sum[j];
-  }
+    {
+      (*out[j])[l.a[k]] += w[N * k + j];
+      (*out[j])[l.b[k]] += w[N * k + j];
+    }
 }
 
 /// The per-sphere sums the gates need, in one pass over the links:
@@ -244,16 +231,14 @@ void sphere_gate_sums(const Particles& p, const Links& l, const Material& mat, i
 {
   auto set = [&](std::size_t k)
   { return compaction_set(l.compaction[k], l.d0[k], link_compaction(l, k, mat.compaction)); };
-  const auto& first = s.links.first;
   if (stretch && pressure)
-    sphere_sums<2>(p, l, nt, s.link_stretch, {&s.stretch, &s.pressure}, first, s.in_first, s.in_links,
-                   [&](std::size_t k, double D)
+    sphere_sums<2>(p, l, nt, s.link_stretch, {&s.stretch, &s.pressure}, [&](std::size_t k, double D)
                    { return std::array<double, 2>{D - l.d0[k], D - l.d0[k] - set(k)}; });
   else if (stretch)
-    sphere_sums<1>(p, l, nt, s.link_stretch, {&s.stretch}, first, s.in_first, s.in_links,
+    sphere_sums<1>(p, l, nt, s.link_stretch, {&s.stretch},
                    [&](std::size_t k, double D) { return std::array<double, 1>{D - l.d0[k]}; });
   else if (pressure)
-    sphere_sums<1>(p, l, nt, s.link_stretch, {&s.pressure}, first, s.in_first, s.in_links,
+    sphere_sums<1>(p, l, nt, s.link_stretch, {&s.pressure},
                    [&](std::size_t k, double D) { return std::array<double, 1>{D - l.d0[k] - set(k)}; });
   if (pressure)
     for (std::size_t i = 0; i < p.size(); ++i)
@@ -277,16 +262,6 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       || s.links.threads != nt)
   {
     s.links.build(np, l.a, l.b, nt);
-    // the links by b, each sphere's in link order (sphere_sums)
-    s.in_first.assign(np + 1, 0);
-    for (const std::int32_t j : l.b)
-      ++s.in_first[j + 1];
-    for (std::size_t i = 0; i < np; ++i)
-      s.in_first[i + 1] += s.in_first[i];
-    s.in_links.resize(l.size());
-    std::vector<std::int32_t> fill(s.in_first.begin(), s.in_first.end() - 1);
-    for (std::size_t k = 0; k < l.size(); ++k)
-      s.in_links[fill[l.b[k]]++] = static_cast<std::int32_t>(k);
     s.links_for = l.a.data();
     s.links_size = l.size();
     s.pairs_version = SIZE_MAX;

@@ -65,9 +65,6 @@ struct ForceScratch
   /// (Material::rate_mean_tension)
   std::vector<double> stretch;
   std::vector<double> link_stretch; ///< per link: its terms of `stretch` and `pressure`
-  /// the links by sphere b (CSR, each sphere's in link order): the
-  /// spheres' sums of link terms in link order (stretch, pressure)
-  std::vector<std::int32_t> in_first, in_links;
   /// per sphere: its links' mean pressure [Pa] (CompactionLaw::pressure)
   std::vector<double> pressure;
   const std::int32_t* links_for = nullptr; ///< the link array the index was built for

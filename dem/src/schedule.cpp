@@ -83,11 +83,10 @@ std::size_t SweepIndex::bytes() const
 std::size_t ForceScratch::bytes() const
 {
   std::size_t s = (records.capacity() + pair_slip.capacity() + demand.capacity() + stretch.capacity()
-                   + link_stretch.capacity() + pressure.capacity())
+                   + link_stretch.capacity())
                       * sizeof(double)
                   + links.bytes()
-                  + pairs.bytes()
-                  + (broken_ids.capacity() + in_first.capacity() + in_links.capacity()) * sizeof(std::int32_t)
+                  + pairs.bytes() + broken_ids.capacity() * sizeof(std::int32_t)
                   + broken_all.capacity() * sizeof(broken_all[0]);
   for (const auto& b : broken)
     s += b.capacity() * sizeof(b[0]);
