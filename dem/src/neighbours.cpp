@@ -313,18 +313,54 @@ void NeighbourList::end_search()
   _pending = false;
 }
 
-void NeighbourList::copy_pairs(std::size_t q0, std::size_t q1, std::size_t o)
+/// The columns of the list a merge writes, zero (no history) until filled.
+struct NeighbourList::NewList
+{
+  NewList(std::size_t m, bool rolling)
+    : a(m), b(m), link(m), fs(3 * m), mr(rolling ? 3 * m : 0), n(3 * m), touching(m)
+  {
+  }
+  std::vector<std::int32_t> a, b, link;
+  std::vector<double> fs, mr, n;
+  std::vector<std::uint8_t> touching;
+};
+
+void NeighbourList::copy_pairs(std::size_t q0, std::size_t q1, NewList& out, std::size_t o) const
 {
   if (q1 <= q0)
     return;
-  std::copy(a.begin() + q0, a.begin() + q1, _spare_a.begin() + o);
-  std::copy(b.begin() + q0, b.begin() + q1, _spare_b.begin() + o);
-  std::copy(link.begin() + q0, link.begin() + q1, _spare_link.begin() + o);
-  std::copy(fs.begin() + 3 * q0, fs.begin() + 3 * q1, _spare_fs.begin() + 3 * o);
+  std::copy(a.begin() + q0, a.begin() + q1, out.a.begin() + o);
+  std::copy(b.begin() + q0, b.begin() + q1, out.b.begin() + o);
+  std::copy(link.begin() + q0, link.begin() + q1, out.link.begin() + o);
+  std::copy(fs.begin() + 3 * q0, fs.begin() + 3 * q1, out.fs.begin() + 3 * o);
   if (_rolling)
-    std::copy(mr.begin() + 3 * q0, mr.begin() + 3 * q1, _spare_mr.begin() + 3 * o);
-  std::copy(n.begin() + 3 * q0, n.begin() + 3 * q1, _spare_n.begin() + 3 * o);
-  std::copy(touching.begin() + q0, touching.begin() + q1, _spare_touching.begin() + o);
+    std::copy(mr.begin() + 3 * q0, mr.begin() + 3 * q1, out.mr.begin() + 3 * o);
+  std::copy(n.begin() + 3 * q0, n.begin() + 3 * q1, out.n.begin() + 3 * o);
+  std::copy(touching.begin() + q0, touching.begin() + q1, out.touching.begin() + o);
+}
+
+std::size_t NeighbourList::first_at_or_after(std::size_t q, std::int32_t i, std::int32_t j) const
+{
+  // galloping from q, then bisection: a dense merge steps, a sparse one jumps
+  auto less = [&](std::size_t k) { return a[k] < i || (a[k] == i && b[k] < j); };
+  const std::size_t m = a.size();
+  std::size_t lo = q, hi = q, step = 1;
+  while (hi < m && less(hi))
+  {
+    lo = hi + 1;
+    hi += step;
+    step *= 2;
+  }
+  hi = std::min(hi, m);
+  while (lo < hi)
+  {
+    const std::size_t mid = lo + (hi - lo) / 2;
+    if (less(mid))
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo;
 }
 
 void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std::int32_t> nb,
@@ -336,17 +372,9 @@ void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std:
   // unless it is among the new ones, and then keeps its history (a touching
   // pair always is: its gap is below the skin); a new pair already listed
   // keeps the listed one's history. The listed pairs between two new ones
-  // are copied as runs; the new list is written into the spare arrays,
-  // then swapped with the list.
+  // are copied as runs.
   const std::size_t m = a.size();
-  const std::size_t total = (replace_all ? 0 : m) + na.size(); // at most; cut to size below
-  _spare_a.resize(total);
-  _spare_b.resize(total);
-  _spare_link.resize(total);
-  _spare_fs.resize(3 * total);
-  _spare_mr.resize(_rolling ? 3 * total : 0);
-  _spare_n.resize(3 * total);
-  _spare_touching.resize(total);
+  NewList out((replace_all ? 0 : m) + na.size(), _rolling); // at most; cut to size below
   std::size_t o = 0;
   // the listed pairs [q0, q1) that stay, copied in runs
   auto keep = [&](std::size_t q0, std::size_t q1)
@@ -358,71 +386,47 @@ void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std:
       for (std::size_t q = q0; q < q1; ++q)
         if (moving[a[q]] || moving[b[q]])
         {
-          copy_pairs(run, q, o);
+          copy_pairs(run, q, out, o);
           o += q - run;
           run = q + 1;
         }
-    copy_pairs(run, q1, o);
+    copy_pairs(run, q1, out, o);
     o += q1 - run;
   };
   std::size_t q = 0;
-  for (std::size_t p = 0; p < na.size(); ++p)
+  for (std::size_t p = 0; p < na.size(); ++p, ++o)
   {
-    // the first listed pair at or after (na[p], nb[p]), from q: a galloping
-    // search, so that a dense merge steps and a sparse one jumps
-    auto less = [&](std::size_t k) { return a[k] < na[p] || (a[k] == na[p] && b[k] < nb[p]); };
-    std::size_t lo = q, hi = q, step = 1;
-    while (hi < m && less(hi))
-    {
-      lo = hi + 1;
-      hi += step;
-      step *= 2;
-    }
-    hi = std::min(hi, m);
-    while (lo < hi)
-    {
-      const std::size_t mid = lo + (hi - lo) / 2;
-      if (less(mid))
-        lo = mid + 1;
-      else
-        hi = mid;
-    }
-    keep(q, lo);
-    q = lo;
+    const std::size_t at = first_at_or_after(q, na[p], nb[p]);
+    keep(q, at);
+    q = at;
     if (q < m && a[q] == na[p] && b[q] == nb[p])
     {
-      copy_pairs(q, q + 1, o);
+      copy_pairs(q, q + 1, out, o); // listed already: its history stays
       ++q;
     }
     else
     {
-      _spare_a[o] = na[p];
-      _spare_b[o] = nb[p];
-      std::fill_n(&_spare_fs[3 * o], 3, 0.0);
-      if (_rolling)
-        std::fill_n(&_spare_mr[3 * o], 3, 0.0);
-      std::fill_n(&_spare_n[3 * o], 3, 0.0);
-      _spare_touching[o] = 0;
+      out.a[o] = na[p];
+      out.b[o] = nb[p];
     }
-    _spare_link[o] = nlink[p];
-    ++o;
+    out.link[o] = nlink[p];
   }
   keep(q, m);
-  _spare_a.resize(o);
-  _spare_b.resize(o);
-  _spare_link.resize(o);
-  _spare_fs.resize(3 * o);
+  a = std::move(out.a);
+  b = std::move(out.b);
+  link = std::move(out.link);
+  fs = std::move(out.fs);
+  mr = std::move(out.mr);
+  n = std::move(out.n);
+  touching = std::move(out.touching);
+  a.resize(o);
+  b.resize(o);
+  link.resize(o);
+  fs.resize(3 * o);
   if (_rolling)
-    _spare_mr.resize(3 * o);
-  _spare_n.resize(3 * o);
-  _spare_touching.resize(o);
-  a.swap(_spare_a);
-  b.swap(_spare_b);
-  link.swap(_spare_link);
-  fs.swap(_spare_fs);
-  mr.swap(_spare_mr);
-  n.swap(_spare_n);
-  touching.swap(_spare_touching);
+    mr.resize(3 * o);
+  n.resize(3 * o);
+  touching.resize(o);
   ++_version;
 }
 
@@ -473,14 +477,12 @@ void NeighbourList::keep_rolling()
 
 std::size_t NeighbourList::bytes() const
 {
-  return (a.capacity() + b.capacity() + link.capacity() + _spare_a.capacity() + _spare_b.capacity()
-          + _spare_link.capacity() + _pend_a.capacity() + _pend_b.capacity() + _pend_link.capacity()
-          + _movers.capacity())
+  return (a.capacity() + b.capacity() + link.capacity() + _pend_a.capacity() + _pend_b.capacity()
+          + _pend_link.capacity() + _movers.capacity())
              * sizeof(std::int32_t)
-         + (fs.capacity() + mr.capacity() + n.capacity() + _spare_fs.capacity() + _spare_mr.capacity()
-            + _spare_n.capacity() + _x_build.capacity() + _x_grid.capacity())
+         + (fs.capacity() + mr.capacity() + n.capacity() + _x_build.capacity() + _x_grid.capacity())
              * sizeof(double)
-         + touching.capacity() + _spare_touching.capacity() + _moving.capacity() + (_grid ? _grid->bytes() : 0);
+         + touching.capacity() + _moving.capacity() + (_grid ? _grid->bytes() : 0);
 }
 
 } // namespace dembridge::dem

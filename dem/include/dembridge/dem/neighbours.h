@@ -187,7 +187,9 @@ private:
                      const std::vector<std::int32_t>& movers, bool defer);
   void merge(std::span<const std::int32_t> na, std::span<const std::int32_t> nb,
              std::span<const std::int32_t> nlink, std::span<const std::uint8_t> moving, bool replace_all);
-  void copy_pairs(std::size_t q0, std::size_t q1, std::size_t o);
+  struct NewList; // a merge's output columns (neighbours.cpp)
+  void copy_pairs(std::size_t q0, std::size_t q1, NewList& out, std::size_t o) const;
+  std::size_t first_at_or_after(std::size_t q, std::int32_t i, std::int32_t j) const;
   void end_search();
   double _skin;
   std::size_t _builds = 0, _version = 0, _partial = 0;
@@ -204,11 +206,6 @@ private:
   // a deferred search's new pairs, sorted by (a, b)
   std::vector<std::int32_t> _pend_a, _pend_b, _pend_link;
   bool _pending = false;
-  // merge() writes the new list here, then swaps it with the list (the
-  // arrays keep their capacity: no allocation once sized)
-  std::vector<std::int32_t> _spare_a, _spare_b, _spare_link;
-  std::vector<double> _spare_fs, _spare_mr, _spare_n;
-  std::vector<std::uint8_t> _spare_touching;
 };
 
 } // namespace dembridge::dem
