@@ -225,6 +225,95 @@ TEST_CASE("objectivity: a stored shear force turns with the pair", "[dem]")
   CHECK_THAT(l.fs[2], WithinRel(fs0[2], 1e-9));
 }
 
+TEST_CASE("crack closure: a broken link's spheres meet again at its initial distance", "[dem]")
+{
+  // Two spheres linked 2.4 mm apart (0.4 mm beyond touching), the link
+  // broken, pushed to 2.3 mm. With crack closure the pair is a contact from
+  // the link's initial distance with the link's K_n: the force on b is
+  // K_n (D_init - D) and the stored energy K_n (D_init - D)^2 / 2, to
+  // round-off; the list keeps the pair although its gap from touching,
+  // 0.3 mm, is six skins. Without it the spheres are apart: no pair, no force.
+  for (const bool closure : {false, true})
+  {
+    std::vector<double> x{0, 0, 0, 2.4e-3, 0, 0}, r{1e-3, 1e-3};
+    auto p = make_particles(x, r, 2400.0, 0.6);
+    Material m = concrete();
+    m.crack_closure = closure;
+    auto l = create_links(p, 1.25, m);
+    REQUIRE(l.size() == 1);
+    l.state[0] = LinkState::broken_tension;
+    p.x[3] = 2.3e-3;
+    NeighbourList nl(0.05e-3);
+    if (closure)
+      nl.close_cracks();
+    nl.update(p.x, p.r, l);
+    ForceCounters c;
+    compute_forces(p, l, nl, m, 1e-7, c);
+    INFO("crack closure " << closure);
+    const double closed = l.d0[0] - p.x[3];
+    if (closure)
+    {
+      REQUIRE(nl.size() == 1);
+      CHECK_THAT(p.f[3], WithinRel(l.kn[0] * closed, 1e-9));
+      CHECK_THAT(elastic_energy(p, l, nl, m), WithinRel(0.5 * l.kn[0] * closed * closed, 1e-9));
+    }
+    else
+    {
+      CHECK(nl.size() == 0);
+      CHECK(p.f[3] == 0.0);
+    }
+  }
+}
+
+TEST_CASE("crack closure: a link broken in shear while compressed keeps its normal force", "[dem]")
+{
+  // The link of the test above at rest 2.4 mm apart, compressed by 10 um,
+  // then sheared to twice its Mohr-Coulomb cap in one step (no shear force
+  // stored before). With crack closure its normal spring goes on as the
+  // contact's: the force on b along the normal is K_n (D_init - D) and
+  // nothing is booked as released (the shear spring stored nothing).
+  // Without it the spheres, 0.39 mm apart, do not touch: no force, and the
+  // normal spring's energy is released, K_n delta_old delta / 2 with
+  // delta = D - D_init and delta_old = delta - dt v_b . n (force_loop.cpp).
+  // All to round-off.
+  for (const bool closure : {false, true})
+  {
+    std::vector<double> x{0, 0, 0, 2.4e-3, 0, 0}, r{1e-3, 1e-3};
+    auto p = make_particles(x, r, 2400.0, 0.6);
+    Material m = concrete();
+    m.crack_closure = closure;
+    auto l = create_links(p, 1.25, m);
+    REQUIRE(l.size() == 1);
+    const double kn = l.kn[0], dt = 1e-7;
+    p.x[3] -= 1e-5;
+    NeighbourList nl(0.2e-3);
+    if (closure)
+      nl.close_cracks();
+    nl.update(p.x, p.r, l);
+    const auto law = m.law(1e-3, 1e-3, l.d0[0]);
+    const double cap = law.s_int * law.cohesion + kn * 1e-5 * law.tan_phi_i;
+    p.v[4] = 2.0 * cap / l.ks[0] / dt;
+    p.x[4] += dt * p.v[4];
+    ForceCounters c;
+    compute_forces(p, l, nl, m, dt, c);
+    INFO("crack closure " << closure);
+    REQUIRE(l.state[0] == LinkState::broken_shear);
+    const double D = std::hypot(p.x[3], p.x[4]);
+    const double along = (p.f[3] * p.x[3] + p.f[4] * p.x[4]) / D; // the force on b along the normal
+    const double delta = D - l.d0[0], delta_old = delta - dt * p.v[4] * p.x[4] / D;
+    if (closure)
+    {
+      CHECK_THAT(along, WithinRel(-kn * delta, 1e-9));
+      CHECK(c.breakage == 0.0);
+    }
+    else
+    {
+      CHECK(p.f[3] == 0.0);
+      CHECK_THAT(c.breakage, WithinRel(0.5 * kn * delta_old * delta, 1e-9));
+    }
+  }
+}
+
 TEST_CASE("a link broken in shear becomes a frictional contact", "[dem]")
 {
   std::vector<double> x{0, 0, 0, 2e-3, 0, 0}, r{1e-3, 1e-3};
@@ -889,11 +978,15 @@ TEST_CASE("neighbour list: complete, sorted and keeping contact histories while 
   // listed, with its link's index; no listed pair is joined by an intact
   // link or farther than R_a + R_b + 1.9 skin; the list is sorted without
   // repeats; and a pair's history (shear force, normal, touching) set
-  // before an update is found after it.
+  // before an update is found after it. With crack closure (links reaching
+  // 1.3 x R_a + R_b, so most linked pairs have a gap) a broken link's pair
+  // counts from max(R_a + R_b, D_init) instead (NeighbourList::close_cracks).
+  const bool closure = GENERATE(false, true);
+  INFO("crack closure " << closure);
   auto p = lattice(6);
   const double skin = 0.2e-3;
   Material m = concrete();
-  Links l = create_links(p, 1.05, m);
+  Links l = create_links(p, closure ? 1.3 : 1.05, m);
   REQUIRE(l.size() > 100);
   for (std::size_t k = 0; k < l.size(); k += 3)
     l.state[k] = LinkState::broken_tension; // a third broken: their pairs are listed with the link
@@ -901,6 +994,8 @@ TEST_CASE("neighbour list: complete, sorted and keeping contact histories while 
   for (std::size_t k = 0; k < l.size(); ++k)
     link_of[{l.a[k], l.b[k]}] = static_cast<std::int32_t>(k);
   NeighbourList nl(skin);
+  if (closure)
+    nl.close_cracks();
   nl.update(p.x, p.r, l);
   std::mt19937 gen(11);
   std::uniform_int_distribution<std::size_t> pick(0, p.size() - 1);
@@ -962,11 +1057,12 @@ TEST_CASE("neighbour list: complete, sorted and keeping contact histories while 
         }
         const double d = std::hypot(p.x[3 * j] - p.x[3 * i], p.x[3 * j + 1] - p.x[3 * i + 1],
                                     p.x[3 * j + 2] - p.x[3 * i + 2]);
-        if (d < p.r[i] + p.r[j] + 0.1 * skin && it == listed.end())
+        const double touch = closure && k >= 0 ? std::max(p.r[i] + p.r[j], l.d0[k]) : p.r[i] + p.r[j];
+        if (d < touch + 0.1 * skin && it == listed.end())
           ++missing;
         // a listed pair was within a skin when last searched; its spheres
         // have moved 0.9 skin at most since
-        if (it != listed.end() && d > p.r[i] + p.r[j] + 1.9 * skin)
+        if (it != listed.end() && d > touch + 1.9 * skin)
           ++stale;
         if (it != listed.end() && nl.link[it->second] != k)
           ++wrong_link;

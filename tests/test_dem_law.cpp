@@ -579,6 +579,57 @@ TEST_CASE("strain-rate effect: the factor stops growing at the rate cap", "[dem]
   CHECK_THAT(most, WithinRel(peak, 1e-3));
 }
 
+TEST_CASE("strain-rate effect: with rate_current the factor follows the current rate, floored at what the link holds",
+          "[dem][rate]")
+{
+  // A link pulled at 100 /s to half its strength there (force F1 = S T
+  // DIF(100 /s) / 2), then at 0.01 /s. Keeping the largest factor
+  // (rate_current false) it stays at DIF(100 /s) and the link elastic. With
+  // rate_current the factor falls to what the link holds, F1 / (S T) (above
+  // DIF(0.01 /s) = 1.26), so the link softens at the first slow step with its
+  // strength F1: its largest force is F1 to within that step's increment
+  // (1e-6 of F1), and its factor F1 / (S T) to round-off.
+  for (const bool current : {false, true})
+  {
+    Material m;
+    m.micro = {0.2, 1.0, 1.0};
+    m.rate_fc = 48e6;
+    m.rate_current = current;
+    Particles p = make_particles(std::vector<double>{0, 0, 0, 2e-3, 0, 0}, std::vector<double>{1e-3, 1e-3}, 2400.0, 1.0);
+    Links l = create_links(p, 1.01, m);
+    const double s_t = std::numbers::pi * 1e-6 * m.tensile, dif = malvar_ross_dif(100.0, 48e6);
+    const double fast = 100.0 * l.d0[0], slow = 0.01 * l.d0[0];
+    const double dt = 0.5 * s_t * dif / l.kn[0] / 2000.0 / fast; // 1000 steps to F1
+    bool slowed = false;
+    DemSolver s(p, l, m, dt, 0.0, 1e-4);
+    s.add_motion({"a", {0}, MotionKind::fixed, {true, true, true}, {}});
+    s.add_motion({"b", {1}, MotionKind::velocity, {true, false, false}, [&](double) { return slowed ? slow : fast; }});
+    s.start();
+    while (l.delta_max[0] * l.kn[0] < 0.5 * s_t * dif)
+      s.step();
+    INFO("rate_current " << current);
+    CHECK_THAT(l.strength[0], WithinRel(dif, 1e-12));
+    const double f1 = l.delta_max[0] * l.kn[0];
+    slowed = true;
+    double most = 0.0;
+    for (int n = 0; n < 20; ++n)
+    {
+      s.step();
+      most = std::max(most, -p.f[3]);
+    }
+    const bool softened = l.delta_max[0] * l.kn[0] > s_t * l.strength[0];
+    CHECK(softened == current);
+    if (current)
+    {
+      CHECK_THAT(l.strength[0], WithinRel(f1 / s_t, 1e-12));
+      CHECK(l.strength[0] > malvar_ross_dif(0.01, 48e6));
+      CHECK_THAT(most, WithinRel(f1, 1e-5));
+    }
+    else
+      CHECK_THAT(l.strength[0], WithinRel(dif, 1e-12));
+  }
+}
+
 TEST_CASE("strain-rate effect: the factor raises C0 too, or T alone (rate_cohesion false)", "[dem][rate]")
 {
   // A link at its initial distance (no normal force) whose stored shear
@@ -692,6 +743,45 @@ TEST_CASE("strain-rate effect: with rate_mean_tension the factor grows only wher
     }
 }
 
+TEST_CASE("strain-rate effect: with rate_current and the gate the factor falls back where the spheres are compressed",
+          "[dem][rate]")
+{
+  // The row of the test above, the A-B link holding a factor of 3 from an
+  // earlier fast pull but never stretched (delta_max 0: it holds nothing).
+  // Compressed spheres: keeping the largest factor it stays 3, following
+  // the current rate it falls to 1. Stretched spheres: DIF(100 /s) = 6.59
+  // either way.
+  for (const bool pushed : {true, false})
+    for (const bool current : {true, false})
+    {
+      Material m;
+      m.micro = {0.2, 1.0, 1.0};
+      m.rate_fc = 48e6;
+      m.rate_mean_tension = true;
+      m.rate_current = current;
+      Particles p = make_particles(std::vector<double>{-2e-3, 0, 0, 0, 0, 0, 2e-3, 0, 0, 4e-3, 0, 0},
+                                   std::vector<double>{1e-3, 1e-3, 1e-3, 1e-3}, 2400.0, 1.0);
+      Links l = create_links(p, 1.01, m);
+      REQUIRE(l.size() == 3);
+      l.strength.assign(3, 3.0);
+      const double shift = pushed ? 1e-4 : 0.0;
+      p.x[0] += shift;
+      p.x[6] += 1e-8;
+      p.x[9] -= shift;
+      p.v[6] = 0.2;
+      NeighbourList nl(1e-4);
+      nl.update(p.x, p.r, l);
+      ForceCounters counters;
+      compute_forces(p, l, nl, m, 1e-9, counters);
+      std::size_t ab = 0;
+      while (!(l.a[ab] == 1 && l.b[ab] == 2))
+        ++ab;
+      INFO("pushed " << pushed << ", rate_current " << current);
+      const double expected = pushed ? (current ? 1.0 : 3.0) : malvar_ross_dif(100.0, 48e6);
+      CHECK_THAT(l.strength[ab], WithinRel(expected, 1e-9));
+    }
+}
+
 TEST_CASE("material file: the optional impact keys round trip, absent ones stay off", "[dem][law]")
 {
   const auto dir = std::filesystem::temp_directory_path() / "dembridge_material_keys";
@@ -704,6 +794,7 @@ TEST_CASE("material file: the optional impact keys round trip, absent ones stay 
   m.material.rate_cohesion = false;
   m.material.rate_filter = 2e-6;
   m.material.rate_mean_tension = true;
+  m.material.rate_current = true;
   m.material.compaction = {0.003, 0.5, 0.033};
   write_material(dir / "on.json", m);
   const Material a = read_material(dir / "on.json").material;
@@ -714,6 +805,7 @@ TEST_CASE("material file: the optional impact keys round trip, absent ones stay 
   CHECK(!a.rate_cohesion);
   CHECK(a.rate_filter == 2e-6);
   CHECK(a.rate_mean_tension);
+  CHECK(a.rate_current);
   CHECK(a.compaction.lock == 0.033);
   write_material(dir / "off.json", MaterialFile{});
   const Material b = read_material(dir / "off.json").material;
@@ -723,6 +815,7 @@ TEST_CASE("material file: the optional impact keys round trip, absent ones stay 
   CHECK(b.rate_cohesion);
   CHECK(b.rate_filter == 0.0);
   CHECK(!b.rate_mean_tension);
+  CHECK(!b.rate_current);
   CHECK(!b.compaction.on());
   // the limit checked like every parameter
   m.material.contact_shear_limit = -1.0;

@@ -54,22 +54,19 @@ double contact_energy(const Particles& p, const Links& l, const NeighbourList& n
   for (int k = 0; k < 3; ++k)
     d[k] = p.x[3 * j + k] - p.x[3 * i + k];
   const double rs = p.r[i] + p.r[j];
-  // a broken compacted link's spheres touch from its rest distance (force_loop.cpp)
-  const std::int32_t k = nl.link[q];
-  const double touch =
-      compacting && k >= 0 ? rs + compaction_set(l.compaction[k], l.d0[k], link_compaction(l, k, mat.compaction)) : rs;
-  const double gap = touch - std::sqrt(dot3(d, d));
-  const double kn = mat.youngs_modulus * interaction_surface(p.r[i], p.r[j]) / rs * cf.cn;
+  // as the force loop has them (impl::contact_spring)
+  const impl::ContactSpring cs = impl::contact_spring(mat, cf, l, nl.link[q], p.r[i], p.r[j], compacting);
+  const double gap = cs.touch - std::sqrt(dot3(d, d));
   const double wq = p.weight.empty() ? 1.0 : 0.5 * (p.weight[i] + p.weight[j]);
-  double e = wq * 0.5 * dot3(&nl.fs[3 * q], &nl.fs[3 * q]) / (kn * cf.cs);
+  double e = wq * 0.5 * dot3(&nl.fs[3 * q], &nl.fs[3 * q]) / cs.ks;
   if (nl.rolling())
   {
     // the rolling spring, k_r = K_s R*^2 (method.md 1.7d)
     const double r_star = p.r[i] * p.r[j] / rs;
-    e += wq * 0.5 * dot3(&nl.mr[3 * q], &nl.mr[3 * q]) / (kn * cf.cs * r_star * r_star);
+    e += wq * 0.5 * dot3(&nl.mr[3 * q], &nl.mr[3 * q]) / (cs.ks * r_star * r_star);
   }
   if (gap > 0.0)
-    e += wq * 0.5 * kn * gap * gap;
+    e += wq * 0.5 * cs.kn * gap * gap;
   return e;
 }
 } // namespace

@@ -15,6 +15,8 @@ namespace dembridge::dem
 {
 using impl::ContactFactors;
 using impl::contact_factors;
+using impl::ContactSpring;
+using impl::contact_spring;
 using impl::dot3;
 
 namespace
@@ -159,6 +161,27 @@ void sweep(SweepIndex& ix, std::span<const std::int32_t> b, bool reset,
   }
 }
 
+// The smallest strength factor that keeps a link as it stands (Material::
+// rate_current, docs/method.md 1.6b), and at least 1: elastic at its largest
+// elongation so far, K_n delta_max <= S_int T f; with the factor on C0 too,
+// its stored shear force within the Mohr-Coulomb cap S_int C0 f - F_t tan(phi_i)
+// (the tension F_t taken at delta_max: the largest it has been, so the floor
+// is on the safe side)
+inline double held_factor(const Links& l, std::int32_t k, const LinkLaw& law, bool cohesion)
+{
+  const double stretch = std::max(l.delta_max[k], 0.0) * law.kn;
+  double f = 1.0;
+  if (law.tensile > 0.0)
+    f = std::max(f, stretch / (law.s_int * law.tensile));
+  if (cohesion && law.cohesion > 0.0)
+  {
+    const double* fs = &l.fs[3 * k];
+    const double shear = std::sqrt(fs[0] * fs[0] + fs[1] * fs[1] + fs[2] * fs[2]);
+    f = std::max(f, (shear + stretch * law.tan_phi_i) / (law.s_int * law.cohesion));
+  }
+  return f;
+}
+
 inline StepRotation load_rotation(const double* rec)
 {
   return {{rec[4], rec[5], rec[6]}, rec[7]};
@@ -293,9 +316,6 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   const bool compacting = mat.compaction.on() && l.compaction.size() == l.size();
   const bool pressure_gated = compacting && mat.compaction.gated() && l.compaction_onset.size() == l.size();
   sphere_gate_sums(p, l, mat, nt, s, gated, pressure_gated);
-  // (the set, <= 0, is 0 for a link that never passed the onset)
-  auto compacted_touch = [&](std::int32_t k, double rs)
-  { return rs + compaction_set(l.compaction[k], l.d0[k], link_compaction(l, k, mat.compaction)); };
   const double* rad = p.r.data();
   bool short_team = false;
   std::size_t spinning = np; // a sphere turning by more than 1 rad in the step
@@ -370,10 +390,15 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     {
       // the rate effect: while the link is elastic, its strength factor
       // follows the largest Malvar-Ross factor of its tensile strain rate
-      // (v(n+1/2) of its spheres along the normal, over D_init)
+      // (v(n+1/2) of its spheres along the normal, over D_init), or with
+      // rate_current the factor of its current rate, floored at what the
+      // link holds
       double& factor = l.strength[k];
-      if (rated && l.delta_max[k] * law.kn <= law.s_int * law.tensile * factor
-          && (!gated || s.stretch[i] + s.stretch[l.b[k]] > 0.0))
+      const bool elastic = rated && l.delta_max[k] * law.kn <= law.s_int * law.tensile * factor;
+      const bool stretched = !gated || s.stretch[i] + s.stretch[l.b[k]] > 0.0;
+      if (elastic && mat.rate_current)
+        factor = held_factor(l, k, law, mat.rate_cohesion);
+      if (elastic && stretched)
       {
         const double* va = &p.v[3 * i];
         const double* vb = &p.v[3 * l.b[k]];
@@ -450,8 +475,11 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       const double delta_old =
           from_set - dt * ((vb[0] - va[0]) * n[0] + (vb[1] - va[1]) * n[1] + (vb[2] - va[2]) * n[2]);
       const double fn_old = link_normal_force(delta_old, delta_max_old, law).fn;
-      s.broken[omp_get_thread_num()].emplace_back(
-          k, wk * (0.5 * fn_old * from_set + 0.5 * dot3(fs_old, trial.data()) / law.ks));
+      // with crack closure a compressed link's normal spring goes on as the
+      // contact's (the same K_n from the same rest distance): nothing of it
+      // is released
+      const double normal = mat.crack_closure && from_set < 0.0 ? 0.0 : 0.5 * fn_old * from_set;
+      s.broken[omp_get_thread_num()].emplace_back(k, wk * (normal + 0.5 * dot3(fs_old, trial.data()) / law.ks));
       std::fill(fs_old, fs_old + 3, 0.0);
       std::fill(out, out + 6, 0.0);
       return false;
@@ -551,10 +579,9 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     const std::int32_t j = nl.b[q];
     const double D = n[3];
     const double rs = rad[i] + rad[j];
-    // a compacted link that broke left its spheres closer than before: they
-    // touch from R_a + R_b + set on (no force from the overlap the
-    // compaction made)
-    const double touch = compacting && nl.link[q] >= 0 ? compacted_touch(nl.link[q], rs) : rs;
+    // where the spheres touch, and the springs (impl::contact_spring)
+    const ContactSpring cs = contact_spring(mat, cf, l, nl.link[q], rad[i], rad[j], compacting);
+    const double touch = cs.touch;
     double* fs_old = &nl.fs[3 * q];
     // the rolling spring: k_r = K_s R*^2 (method.md 1.7d)
     const double r_star = rad[i] * rad[j] / rs;
@@ -564,11 +591,10 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
       {
         // the contact opens: its caps fell to zero, so the shear (and
         // rolling) springs' energy went by sliding (friction)
-        const double kn = mat.youngs_modulus * pair_surface(rad[i], rad[j]) / rs * cf.cn;
         const double wq = weighted_spheres ? 0.5 * (p.weight[i] + p.weight[j]) : 1.0;
-        double e = wq * 0.5 * dot3(fs_old, fs_old) / (kn * cf.cs);
+        double e = wq * 0.5 * dot3(fs_old, fs_old) / cs.ks;
         if constexpr (W == 9)
-          e += wq * 0.5 * dot3(&nl.mr[3 * q], &nl.mr[3 * q]) / (kn * cf.cs * r_star * r_star);
+          e += wq * 0.5 * dot3(&nl.mr[3 * q], &nl.mr[3 * q]) / (cs.ks * r_star * r_star);
         s.pair_slip[q] = e;
       }
       nl.touching[q] = 0;
@@ -580,8 +606,8 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     }
     LinkLaw law = base;
     law.s_int = pair_surface(rad[i], rad[j]);
-    law.kn = mat.youngs_modulus * law.s_int / rs * cf.cn;
-    law.ks = law.kn * cf.cs;
+    law.kn = cs.kn;
+    law.ks = cs.ks;
     const double fn = contact_normal_force(D, touch, law.kn);
     const bool touched = nl.touching[q];
     const double* n_old = touched ? &nl.n[3 * q] : n;

@@ -95,6 +95,29 @@ inline ContactFactors contact_factors(const Material& m)
   const auto k = link_stiffness(m.youngs_modulus, m.poisson_ratio, 1.0, 1.0, m.micro);
   return {k.kn / m.youngs_modulus, k.ks / k.kn};
 }
+/// A contact's springs: the distance from which its spheres push each other
+/// apart, and its normal and shear stiffnesses. Spheres touch from R_a + R_b,
+/// with the contacts' stiffnesses (equation [1] with the factors cf); with
+/// Material::crack_closure the spheres of a broken link touch from the
+/// link's initial distance, with the link's K_n and K_s (method.md 1.7). A
+/// broken compacted link's spheres touch closer by its set (1.6c).
+struct ContactSpring
+{
+  double touch, kn, ks;
+};
+inline ContactSpring contact_spring(const Material& mat, const ContactFactors& cf, const Links& l, std::int32_t link,
+                                    double ra, double rb, bool compacting)
+{
+  const double rs = ra + rb;
+  const bool closing = mat.crack_closure && link >= 0;
+  double touch = closing ? l.d0[link] : rs;
+  if (compacting && link >= 0)
+    touch += compaction_set(l.compaction[link], l.d0[link], link_compaction(l, link, mat.compaction));
+  if (closing)
+    return {touch, l.kn[link], l.ks[link]};
+  const double kn = mat.youngs_modulus * pair_surface(ra, rb) / rs * cf.cn;
+  return {touch, kn, kn * cf.cs};
+}
 } // namespace impl
 
 } // namespace dembridge::dem

@@ -115,12 +115,17 @@ MaterialFile read_material(const std::filesystem::path& file)
     t.rate_mean_tension = get_bool("rate_mean_tension");
   if (j.contains("rate_filter_s"))
     t.rate_filter = get("rate_filter_s");
+  if (j.contains("rate_current"))
+    t.rate_current = get_bool("rate_current");
   // optional: the contacts' Tresca limit (absent: none)
   if (j.contains("contact_shear_limit_pa"))
     t.contact_shear_limit = get("contact_shear_limit_pa");
   // optional: the contacts' rolling resistance (absent: none)
   if (j.contains("rolling_friction"))
     t.rolling_friction = get("rolling_friction");
+  // optional: broken links' spheres meet again at D_init (absent: at R_a + R_b)
+  if (j.contains("crack_closure"))
+    t.crack_closure = get_bool("crack_closure");
   // optional: compaction (absent: none)
   if (j.contains("compaction_onset"))
   {
@@ -169,12 +174,16 @@ void write_material(const std::filesystem::path& file, const MaterialFile& m)
     j["rate_filter_s"] = t.rate_filter;
   if (t.rate_mean_tension)
     j["rate_mean_tension"] = true;
+  if (t.rate_current)
+    j["rate_current"] = true;
   if (!t.rate_cohesion)
     j["rate_cohesion"] = false;
   if (t.contact_shear_limit > 0.0)
     j["contact_shear_limit_pa"] = t.contact_shear_limit;
   if (t.rolling_friction > 0.0)
     j["rolling_friction"] = t.rolling_friction;
+  if (t.crack_closure)
+    j["crack_closure"] = true;
   if (t.compaction.on())
   {
     j["compaction_onset"] = t.compaction.onset;

@@ -183,6 +183,7 @@ void NeighbourList::search_movers(std::span<const double> x, std::span<const dou
                                   bool defer)
 {
   const std::size_t np = r.size();
+  const double reach = this->reach(r, links);
   _grid.emplace(x, _cell, _skip);
   const CellGrid& grid = *_grid;
   if (_moving.size() != np)
@@ -208,12 +209,13 @@ void NeighbourList::search_movers(std::span<const double> x, std::span<const dou
                              return;
                            const double dx = x[3 * j] - x[3 * m], dy = x[3 * j + 1] - x[3 * m + 1],
                                         dz = x[3 * j + 2] - x[3 * m + 2];
-                           const double lim = r[m] + r[j] + _skin;
-                           if (dx * dx + dy * dy + dz * dz >= lim * lim)
+                           const double lim = r[m] + r[j] + _skin + reach;
+                           const double d2 = dx * dx + dy * dy + dz * dz;
+                           if (d2 >= lim * lim)
                              return;
                            const std::int32_t lo = std::min(m, j), hi = std::max(m, j);
                            const std::int32_t k = find_link(links, lo, hi);
-                           if (k >= 0 && links.state[k] == LinkState::intact)
+                           if ((k >= 0 && links.state[k] == LinkState::intact) || !keeps(d2, r[m] + r[j], links, k))
                              return;
                            out.push(lo, hi, k);
                          });
@@ -255,7 +257,8 @@ void NeighbourList::build(std::span<const double> x, std::span<const double> r, 
 {
   const std::size_t np = r.size();
   const double rmax = np ? *std::max_element(r.begin(), r.end()) : 0.0;
-  _cell = 2.0 * rmax + _skin;
+  const double reach = this->reach(r, links);
+  _cell = 2.0 * rmax + _skin + reach;
   _grid.emplace(x, _cell, skip);
   _stale = false;
   _skip.assign(skip.begin(), skip.end());
@@ -270,7 +273,7 @@ void NeighbourList::build(std::span<const double> x, std::span<const double> r, 
 #pragma omp single
     chunk.resize(omp_get_num_threads());
     Found& out = chunk[omp_get_thread_num()];
-    std::vector<std::int32_t> near;
+    std::vector<std::pair<std::int32_t, double>> near; // (j, squared distance)
 #pragma omp for schedule(static)
     for (std::size_t i = 0; i < np; ++i)
     {
@@ -280,18 +283,18 @@ void NeighbourList::build(std::span<const double> x, std::span<const double> r, 
       grid.for_each_later_near(x, i,
                                [&](std::int32_t j, double d2)
                                {
-                                 const double lim = r[i] + r[j] + _skin;
+                                 const double lim = r[i] + r[j] + _skin + reach;
                                  if (d2 < lim * lim)
-                                   near.push_back(j);
+                                   near.emplace_back(j, d2);
                                });
       std::sort(near.begin(), near.end());
       std::int32_t k = first[i];
-      for (auto j : near)
+      for (const auto& [j, d2] : near)
       {
         while (k < first[i + 1] && links.b[k] < j)
           ++k;
         const bool linked = k < first[i + 1] && links.b[k] == j;
-        if (linked && links.state[k] == LinkState::intact)
+        if ((linked && links.state[k] == LinkState::intact) || !keeps(d2, r[i] + r[j], links, linked ? k : -1))
           continue;
         out.push(static_cast<std::int32_t>(i), j, linked ? k : -1);
       }
@@ -303,6 +306,34 @@ void NeighbourList::build(std::span<const double> x, std::span<const double> r, 
   _x_build.assign(x.begin(), x.end());
   _x_grid.assign(x.begin(), x.end());
   ++_builds;
+}
+
+void NeighbourList::close_cracks()
+{
+  _closure = true;
+  _reach_known = false;
+}
+
+double NeighbourList::reach(std::span<const double> r, const Links& links)
+{
+  if (!_closure)
+    return 0.0;
+  if (!_reach_known)
+  {
+    // (the links' initial distances never change: once per list)
+    _reach = 0.0;
+    for (std::size_t k = 0; k < links.size(); ++k)
+      _reach = std::max(_reach, links.d0[k] - r[links.a[k]] - r[links.b[k]]);
+    _reach_known = true;
+  }
+  return _reach;
+}
+
+bool NeighbourList::keeps(double d2, double rs, const Links& links, std::int32_t k) const
+{
+  const double touch = _closure && k >= 0 ? std::max(rs, links.d0[k]) : rs;
+  const double lim = touch + _skin;
+  return d2 < lim * lim;
 }
 
 void NeighbourList::end_search()

@@ -92,6 +92,8 @@ int main(int argc, char** argv)
   demo::add_number(app, "--contact-shear-limit", m.contact_shear_limit,
                    "Tresca limit of the contacts' friction, beside F_c tan(phi_c) [Pa]",
                    Allowed::positive(1e12).or_value(0.0, "none"));
+  app.add_flag("--crack-closure", m.crack_closure,
+               "a broken link's spheres meet again at the link's initial distance, with its stiffnesses");
   demo::add_number(app, "--rolling-friction", m.rolling_friction,
                    "rolling resistance of the contacts: mu_r of the cap |M| <= mu_r R* F_c [-]",
                    Allowed::positive(10.0).or_value(0.0, "none"));
@@ -100,6 +102,9 @@ int main(int argc, char** argv)
                    Allowed::positive(1e10).or_value(0.0, "no rate effect"));
   app.add_flag("--rate-mean-tension", m.rate_mean_tension,
                "strain-rate effect: a link's factor grows only while its spheres' links are, on the whole, stretched");
+  app.add_flag("--rate-current", m.rate_current,
+               "strain-rate effect: a link's factor follows its current rate, not the largest so far (never below "
+               "what the link holds)");
   demo::add_number(app, "--rate-filter", m.rate_filter,
                    "strain-rate effect: time constant of the low-pass filter on each link's rate [s]",
                    Allowed::positive(1.0).or_value(0.0, "no filter"));

@@ -355,6 +355,9 @@ MaterialSpec read_material_section(Reader& r, const std::filesystem::path& scena
   c.contact_shear_limit = r.number("contact_shear_limit_pa", c.contact_shear_limit,
                                    Allowed::positive(1e12).or_value(0.0, "no limit"),
                                    "Tresca limit of the contacts' friction: their largest shear stress [Pa]");
+  c.crack_closure = r.boolean("crack_closure", c.crack_closure,
+                              "a broken link's spheres meet again at the link's initial distance, with its "
+                              "stiffnesses (the crack closes)");
   c.rolling_friction = r.number("rolling_friction", c.rolling_friction, Allowed::positive(10.0).or_value(0.0, "none"),
                                 "rolling resistance of the contacts: mu_r of the cap |M| <= mu_r R* F_c [-]");
   c.rate_fc = r.number("rate_fc_pa", c.rate_fc, Allowed::positive(1e10).or_value(0.0, "no rate effect"),
@@ -364,6 +367,9 @@ MaterialSpec read_material_section(Reader& r, const std::filesystem::path& scena
   c.rate_mean_tension = r.boolean("rate_mean_tension", c.rate_mean_tension,
                                   "strain-rate effect: a link's factor grows only while its spheres' links are, "
                                   "on the whole, stretched");
+  c.rate_current = r.boolean("rate_current", c.rate_current,
+                             "strain-rate effect: a link's factor follows its current rate, not the largest so far "
+                             "(never below what the link holds)");
   c.rate_filter = r.number("rate_filter_s", c.rate_filter, Allowed::positive(1.0).or_value(0.0, "no filter"),
                            "strain-rate effect: time constant of the low-pass filter on each link's rate [s]");
   c.rate_max = r.number("rate_max_1_s", c.rate_max, Allowed::positive(1e9).or_value(0.0, "no cap"),

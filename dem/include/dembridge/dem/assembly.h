@@ -31,6 +31,12 @@ struct Material
   /// the largest shear stress a contact carries, over its S_int [Pa]; 0 =
   /// none (Coulomb friction at any pressure).
   double contact_shear_limit = 0.0;
+  /// Whether the spheres of a broken link meet again where the link was at
+  /// rest, at its initial distance (the crack closes; docs/method.md 1.7),
+  /// with the link's K_n and K_s, instead of at R_a + R_b with the contacts'
+  /// stiffnesses. A link that breaks in shear while compressed then keeps its
+  /// normal force, as a contact.
+  bool crack_closure = false;
   /// Rolling resistance of the contacts (docs/method.md section 1.7d): the
   /// coefficient mu_r of the cap |M| <= mu_r R* F_c on the rolling moment,
   /// R* = R_a R_b / (R_a + R_b) [-]; 0 = none (the spheres roll freely).
@@ -58,6 +64,14 @@ struct Material
   /// the tensile rate law acts where the material is pulled, not where it
   /// fails under compression.
   bool rate_mean_tension = false;
+  /// Whether a link's factor follows the factor of its current rate (true)
+  /// instead of the largest one so far (false), while the link is elastic
+  /// (docs/method.md 1.6b): with rate_mean_tension it falls back to 1 while
+  /// the spheres are compressed. It never falls below what the link already
+  /// holds: its largest elongation so far (K_n delta_max <= S_int T factor)
+  /// and, with rate_cohesion, its stored shear force (|F_s| <= S_int C0
+  /// factor). So a fast wave lifts a link's strength only while it lasts.
+  bool rate_current = false;
   /// Compaction of the links in compression (docs/method.md section 1.6c):
   /// off while compaction.onset is 0.
   CompactionLaw compaction;

@@ -16,9 +16,11 @@
 ///       "links_per_sphere": 12,           how lambda is chosen on a packing
 ///       "rate_fc_pa": 4.8e7,              optional: the strain-rate effect (docs/method.md 1.6b),
 ///       "rate_max_1_s": 100,              with its optional cap, "rate_cohesion": true,
-///       "rate_mean_tension": true, "rate_filter_s": 1e-5
+///       "rate_mean_tension": true, "rate_filter_s": 1e-5,
+///       "rate_current": true,
 ///       "contact_shear_limit_pa": 1.7e8,  optional: the contacts' Tresca limit (1.7)
 ///       "rolling_friction": 0.1,          optional: the contacts' rolling resistance mu_r (1.7d)
+///       "crack_closure": true,            optional: broken links close at D_init (1.7)
 ///       "compaction_onset": 0.004,        optional, with the next two: compaction (1.6c)
 ///       "compaction_stiffness": 0.3,
 ///       "compaction_lock": 0.04,
