@@ -225,6 +225,27 @@ TEST_CASE("objectivity: a stored shear force turns with the pair", "[dem]")
   CHECK_THAT(l.fs[2], WithinRel(fs0[2], 1e-9));
 }
 
+namespace
+{
+// Two spheres of radius 1 mm linked 2.4 mm apart (0.4 mm beyond touching),
+// with or without crack closure.
+struct GappedPair
+{
+  Particles p;
+  Material m;
+  Links l;
+};
+GappedPair gapped_pair(bool closure)
+{
+  GappedPair g{make_particles(std::vector<double>{0, 0, 0, 2.4e-3, 0, 0}, std::vector<double>{1e-3, 1e-3}, 2400.0, 0.6),
+               concrete(), {}};
+  g.m.crack_closure = closure;
+  g.l = create_links(g.p, 1.25, g.m);
+  REQUIRE(g.l.size() == 1);
+  return g;
+}
+} // namespace
+
 TEST_CASE("crack closure: a broken link's spheres meet again at its initial distance", "[dem]")
 {
   // Two spheres linked 2.4 mm apart (0.4 mm beyond touching), the link
@@ -235,12 +256,7 @@ TEST_CASE("crack closure: a broken link's spheres meet again at its initial dist
   // 0.3 mm, is six skins. Without it the spheres are apart: no pair, no force.
   for (const bool closure : {false, true})
   {
-    std::vector<double> x{0, 0, 0, 2.4e-3, 0, 0}, r{1e-3, 1e-3};
-    auto p = make_particles(x, r, 2400.0, 0.6);
-    Material m = concrete();
-    m.crack_closure = closure;
-    auto l = create_links(p, 1.25, m);
-    REQUIRE(l.size() == 1);
+    auto [p, m, l] = gapped_pair(closure);
     l.state[0] = LinkState::broken_tension;
     p.x[3] = 2.3e-3;
     NeighbourList nl(0.05e-3);
@@ -278,12 +294,7 @@ TEST_CASE("crack closure: a link broken in shear while compressed keeps its norm
   // All to round-off.
   for (const bool closure : {false, true})
   {
-    std::vector<double> x{0, 0, 0, 2.4e-3, 0, 0}, r{1e-3, 1e-3};
-    auto p = make_particles(x, r, 2400.0, 0.6);
-    Material m = concrete();
-    m.crack_closure = closure;
-    auto l = create_links(p, 1.25, m);
-    REQUIRE(l.size() == 1);
+    auto [p, m, l] = gapped_pair(closure);
     const double kn = l.kn[0], dt = 1e-7;
     p.x[3] -= 1e-5;
     NeighbourList nl(0.2e-3);

@@ -707,79 +707,44 @@ TEST_CASE("strain-rate effect: with rate_mean_tension the factor grows only wher
 {
   // Four spheres in a row, C - A - B - D, linked to their neighbours. B
   // moves away from A at 100 /s of the link's length and A-B is stretched
-  // by 1e-8 m. With C and D pushed 0.1 mm in (their links compressed far
-  // more than A-B is stretched) A's and B's sums of K_n (D - D_init) D are
-  // negative: the gated factor stays 1, the ungated one is DIF(100 /s).
-  // With C and D in place the sums are positive and the gated factor is
-  // DIF(100 /s) too.
+  // by 1e-8 m; the A-B link holds a factor of 3 from an earlier fast pull,
+  // but has never been stretched (delta_max 0: it holds nothing). With C
+  // and D pushed 0.1 mm in (their links compressed far more than A-B is
+  // stretched) A's and B's sums of K_n (D - D_init) D are negative: the
+  // gated factor stays 3 (it falls to 1 following the current rate,
+  // rate_current), the ungated one is DIF(100 /s) = 6.59. With C and D in
+  // place the sums are positive and the gated factor is DIF(100 /s) too.
   for (const bool pushed : {true, false})
     for (const bool gate : {true, false})
-    {
-      Material m;
-      m.micro = {0.2, 1.0, 1.0};
-      m.rate_fc = 48e6;
-      m.rate_mean_tension = gate;
-      Particles p = make_particles(std::vector<double>{-2e-3, 0, 0, 0, 0, 0, 2e-3, 0, 0, 4e-3, 0, 0},
-                                   std::vector<double>{1e-3, 1e-3, 1e-3, 1e-3}, 2400.0, 1.0);
-      Links l = create_links(p, 1.01, m);
-      REQUIRE(l.size() == 3);
-      l.strength.assign(3, 1.0);
-      const double shift = pushed ? 1e-4 : 0.0;
-      p.x[0] += shift;     // C
-      p.x[6] += 1e-8;      // B
-      p.x[9] -= shift;     // D
-      p.v[6] = 0.2;        // B: 100 /s over D_init = 2 mm
-      NeighbourList nl(1e-4);
-      nl.update(p.x, p.r, l);
-      ForceCounters counters;
-      compute_forces(p, l, nl, m, 1e-9, counters);
-      // the A-B link: the one between spheres 1 and 2
-      std::size_t ab = 0;
-      while (!(l.a[ab] == 1 && l.b[ab] == 2))
-        ++ab;
-      INFO("pushed " << pushed << ", gate " << gate);
-      const double expected = gate && pushed ? 1.0 : malvar_ross_dif(100.0, 48e6);
-      CHECK_THAT(l.strength[ab], WithinRel(expected, 1e-9));
-    }
-}
-
-TEST_CASE("strain-rate effect: with rate_current and the gate the factor falls back where the spheres are compressed",
-          "[dem][rate]")
-{
-  // The row of the test above, the A-B link holding a factor of 3 from an
-  // earlier fast pull but never stretched (delta_max 0: it holds nothing).
-  // Compressed spheres: keeping the largest factor it stays 3, following
-  // the current rate it falls to 1. Stretched spheres: DIF(100 /s) = 6.59
-  // either way.
-  for (const bool pushed : {true, false})
-    for (const bool current : {true, false})
-    {
-      Material m;
-      m.micro = {0.2, 1.0, 1.0};
-      m.rate_fc = 48e6;
-      m.rate_mean_tension = true;
-      m.rate_current = current;
-      Particles p = make_particles(std::vector<double>{-2e-3, 0, 0, 0, 0, 0, 2e-3, 0, 0, 4e-3, 0, 0},
-                                   std::vector<double>{1e-3, 1e-3, 1e-3, 1e-3}, 2400.0, 1.0);
-      Links l = create_links(p, 1.01, m);
-      REQUIRE(l.size() == 3);
-      l.strength.assign(3, 3.0);
-      const double shift = pushed ? 1e-4 : 0.0;
-      p.x[0] += shift;
-      p.x[6] += 1e-8;
-      p.x[9] -= shift;
-      p.v[6] = 0.2;
-      NeighbourList nl(1e-4);
-      nl.update(p.x, p.r, l);
-      ForceCounters counters;
-      compute_forces(p, l, nl, m, 1e-9, counters);
-      std::size_t ab = 0;
-      while (!(l.a[ab] == 1 && l.b[ab] == 2))
-        ++ab;
-      INFO("pushed " << pushed << ", rate_current " << current);
-      const double expected = pushed ? (current ? 1.0 : 3.0) : malvar_ross_dif(100.0, 48e6);
-      CHECK_THAT(l.strength[ab], WithinRel(expected, 1e-9));
-    }
+      for (const bool current : {false, true})
+      {
+        Material m;
+        m.micro = {0.2, 1.0, 1.0};
+        m.rate_fc = 48e6;
+        m.rate_mean_tension = gate;
+        m.rate_current = current;
+        Particles p = make_particles(std::vector<double>{-2e-3, 0, 0, 0, 0, 0, 2e-3, 0, 0, 4e-3, 0, 0},
+                                     std::vector<double>{1e-3, 1e-3, 1e-3, 1e-3}, 2400.0, 1.0);
+        Links l = create_links(p, 1.01, m);
+        REQUIRE(l.size() == 3);
+        l.strength.assign(3, 3.0);
+        const double shift = pushed ? 1e-4 : 0.0;
+        p.x[0] += shift;     // C
+        p.x[6] += 1e-8;      // B
+        p.x[9] -= shift;     // D
+        p.v[6] = 0.2;        // B: 100 /s over D_init = 2 mm
+        NeighbourList nl(1e-4);
+        nl.update(p.x, p.r, l);
+        ForceCounters counters;
+        compute_forces(p, l, nl, m, 1e-9, counters);
+        // the A-B link: the one between spheres 1 and 2
+        std::size_t ab = 0;
+        while (!(l.a[ab] == 1 && l.b[ab] == 2))
+          ++ab;
+        INFO("pushed " << pushed << ", gate " << gate << ", rate_current " << current);
+        const double expected = gate && pushed ? (current ? 1.0 : 3.0) : malvar_ross_dif(100.0, 48e6);
+        CHECK_THAT(l.strength[ab], WithinRel(expected, 1e-9));
+      }
 }
 
 TEST_CASE("material file: the optional impact keys round trip, absent ones stay off", "[dem][law]")
