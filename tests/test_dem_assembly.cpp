@@ -228,46 +228,46 @@ TEST_CASE("objectivity: a stored shear force turns with the pair", "[dem]")
 namespace
 {
 // Two spheres of radius 1 mm linked 2.4 mm apart (0.4 mm beyond touching),
-// with or without crack closure.
+// with crack closure c (0: off).
 struct GappedPair
 {
   Particles p;
   Material m;
   Links l;
 };
-GappedPair gapped_pair(bool closure)
+GappedPair gapped_pair(double c)
 {
   GappedPair g{make_particles(std::vector<double>{0, 0, 0, 2.4e-3, 0, 0}, std::vector<double>{1e-3, 1e-3}, 2400.0, 0.6),
                concrete(), {}};
-  g.m.crack_closure = closure;
+  g.m.crack_closure = c;
   g.l = create_links(g.p, 1.25, g.m);
   REQUIRE(g.l.size() == 1);
   return g;
 }
 } // namespace
 
-TEST_CASE("crack closure: a broken link's spheres meet again at its initial distance", "[dem]")
+TEST_CASE("crack closure: a broken link's spheres meet again at their closing distance", "[dem]")
 {
-  // Two spheres linked 2.4 mm apart (0.4 mm beyond touching), the link
-  // broken, pushed to 2.3 mm. With crack closure the pair is a contact from
-  // the link's initial distance with the link's K_n: the force on b is
-  // K_n (D_init - D) and the stored energy K_n (D_init - D)^2 / 2, to
-  // round-off; the list keeps the pair although its gap from touching,
-  // 0.3 mm, is six skins. Without it the spheres are apart: no pair, no force.
-  for (const bool closure : {false, true})
+  // The pair's link broken, its spheres pushed to 2.15 mm. With crack
+  // closure c the pair is a contact from 2.4 - (1 - c) 0.4 mm (2.2 mm at c =
+  // 0.5, D_init at c = 1) with the link's K_n: the force on b is K_n (touch
+  // - D) and the stored energy K_n (touch - D)^2 / 2, to round-off; the list
+  // keeps the pair although its gap from touching, 0.15 mm, is three
+  // skins. Without closure the spheres are apart: no pair, no force.
+  for (const double c : {0.0, 0.5, 1.0})
   {
-    auto [p, m, l] = gapped_pair(closure);
+    auto [p, m, l] = gapped_pair(c);
     l.state[0] = LinkState::broken_tension;
-    p.x[3] = 2.3e-3;
+    p.x[3] = 2.15e-3;
     NeighbourList nl(0.05e-3);
-    if (closure)
-      nl.close_cracks();
+    if (c > 0.0)
+      nl.close_cracks(c);
     nl.update(p.x, p.r, l);
-    ForceCounters c;
-    compute_forces(p, l, nl, m, 1e-7, c);
-    INFO("crack closure " << closure);
-    const double closed = l.d0[0] - p.x[3];
-    if (closure)
+    ForceCounters counters;
+    compute_forces(p, l, nl, m, 1e-7, counters);
+    INFO("crack closure " << c);
+    const double closed = (c == 1.0 ? l.d0[0] : 2.2e-3) - p.x[3];
+    if (c > 0.0)
     {
       REQUIRE(nl.size() == 1);
       CHECK_THAT(p.f[3], WithinRel(l.kn[0] * closed, 1e-9));
@@ -281,47 +281,44 @@ TEST_CASE("crack closure: a broken link's spheres meet again at its initial dist
   }
 }
 
-TEST_CASE("crack closure: a link broken in shear while compressed keeps its normal force", "[dem]")
+TEST_CASE("crack closure: a link broken in shear while compressed keeps its normal force from the closing distance",
+          "[dem]")
 {
-  // The link of the test above at rest 2.4 mm apart, compressed by 10 um,
-  // then sheared to twice its Mohr-Coulomb cap in one step (no shear force
-  // stored before). With crack closure its normal spring goes on as the
-  // contact's: the force on b along the normal is K_n (D_init - D) and
-  // nothing is booked as released (the shear spring stored nothing).
-  // Without it the spheres, 0.39 mm apart, do not touch: no force, and the
-  // normal spring's energy is released, K_n delta_old delta / 2 with
-  // delta = D - D_init and delta_old = delta - dt v_b . n (force_loop.cpp).
-  // All to round-off.
-  for (const bool closure : {false, true})
+  // The pair's link compressed by 0.25 mm (to 2.15 mm), then sheared to
+  // twice its cap in one step (no friction term, phi_i = 0, so that the
+  // shear barely tilts the pair; no shear force stored before). Its normal
+  // spring released K_n delta_old delta / 2 without closure (delta = D -
+  // D_init, delta_old = delta - dt v_b . n: force_loop.cpp), and no force
+  // is left (the spheres do not touch). With closure c the contact goes on
+  // from the closing distance: the force on b along the normal is K_n
+  // (touch - D), and the release is the spring's less the contact's share
+  // s^2, s = 1 - (D_init - touch) / |delta| (0.2 at c = 0.5, 1 at c = 1:
+  // nothing released). All to round-off.
+  for (const double c : {0.0, 0.5, 1.0})
   {
-    auto [p, m, l] = gapped_pair(closure);
+    auto [p, m, l] = gapped_pair(c);
+    m.phi_i_deg = 0.0;
     const double kn = l.kn[0], dt = 1e-7;
-    p.x[3] -= 1e-5;
+    p.x[3] -= 0.25e-3;
     NeighbourList nl(0.2e-3);
-    if (closure)
-      nl.close_cracks();
+    if (c > 0.0)
+      nl.close_cracks(c);
     nl.update(p.x, p.r, l);
     const auto law = m.law(1e-3, 1e-3, l.d0[0]);
-    const double cap = law.s_int * law.cohesion + kn * 1e-5 * law.tan_phi_i;
-    p.v[4] = 2.0 * cap / l.ks[0] / dt;
+    p.v[4] = 2.0 * law.s_int * law.cohesion / l.ks[0] / dt;
     p.x[4] += dt * p.v[4];
-    ForceCounters c;
-    compute_forces(p, l, nl, m, dt, c);
-    INFO("crack closure " << closure);
+    ForceCounters counters;
+    compute_forces(p, l, nl, m, dt, counters);
+    INFO("crack closure " << c);
     REQUIRE(l.state[0] == LinkState::broken_shear);
     const double D = std::hypot(p.x[3], p.x[4]);
     const double along = (p.f[3] * p.x[3] + p.f[4] * p.x[4]) / D; // the force on b along the normal
     const double delta = D - l.d0[0], delta_old = delta - dt * p.v[4] * p.x[4] / D;
-    if (closure)
-    {
-      CHECK_THAT(along, WithinRel(-kn * delta, 1e-9));
-      CHECK(c.breakage == 0.0);
-    }
-    else
-    {
-      CHECK(p.f[3] == 0.0);
-      CHECK_THAT(c.breakage, WithinRel(0.5 * kn * delta_old * delta, 1e-9));
-    }
+    const double touch = c > 0.0 ? l.d0[0] - (1.0 - c) * (l.d0[0] - 2e-3) : 2e-3;
+    const double share = c > 0.0 ? 1.0 - (l.d0[0] - touch) / -delta : 0.0;
+    CHECK_THAT(along, Catch::Matchers::WithinAbs(kn * std::max(touch - D, 0.0), 1e-9 * kn * 0.25e-3));
+    CHECK_THAT(counters.breakage, Catch::Matchers::WithinAbs(0.5 * kn * delta_old * delta * (1.0 - share * share),
+                                            1e-9 * 0.5 * kn * 0.25e-3 * 0.25e-3));
   }
 }
 
@@ -989,9 +986,10 @@ TEST_CASE("neighbour list: complete, sorted and keeping contact histories while 
   // listed, with its link's index; no listed pair is joined by an intact
   // link or farther than R_a + R_b + 1.9 skin; the list is sorted without
   // repeats; and a pair's history (shear force, normal, touching) set
-  // before an update is found after it. With crack closure (links reaching
-  // 1.3 x R_a + R_b, so most linked pairs have a gap) a broken link's pair
-  // counts from max(R_a + R_b, D_init) instead (NeighbourList::close_cracks).
+  // before an update is found after it. With crack closure c = 0.6 (links
+  // reaching 1.3 x R_a + R_b, so most linked pairs have a gap) a broken
+  // link's pair counts from its closing distance, max(R_a + R_b, D_init - 0.4
+  // (D_init - R_a - R_b)), instead (NeighbourList::close_cracks).
   const bool closure = GENERATE(false, true);
   INFO("crack closure " << closure);
   auto p = lattice(6);
@@ -1006,7 +1004,7 @@ TEST_CASE("neighbour list: complete, sorted and keeping contact histories while 
     link_of[{l.a[k], l.b[k]}] = static_cast<std::int32_t>(k);
   NeighbourList nl(skin);
   if (closure)
-    nl.close_cracks();
+    nl.close_cracks(0.6);
   nl.update(p.x, p.r, l);
   std::mt19937 gen(11);
   std::uniform_int_distribution<std::size_t> pick(0, p.size() - 1);
@@ -1068,7 +1066,8 @@ TEST_CASE("neighbour list: complete, sorted and keeping contact histories while 
         }
         const double d = std::hypot(p.x[3 * j] - p.x[3 * i], p.x[3 * j + 1] - p.x[3 * i + 1],
                                     p.x[3 * j + 2] - p.x[3 * i + 2]);
-        const double touch = closure && k >= 0 ? std::max(p.r[i] + p.r[j], l.d0[k]) : p.r[i] + p.r[j];
+        const double rs = p.r[i] + p.r[j];
+        const double touch = closure && k >= 0 ? std::max(rs, l.d0[k] - 0.4 * (l.d0[k] - rs)) : rs;
         if (d < touch + 0.1 * skin && it == listed.end())
           ++missing;
         // a listed pair was within a skin when last searched; its spheres

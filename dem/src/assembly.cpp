@@ -43,6 +43,8 @@ void Material::validate() const
     impl::out_of_range("strain-rate law's compressive strength f_c", rate_fc, ">= 0 Pa (0 = no rate effect)");
   if (!(contact_shear_limit >= 0.0) || !std::isfinite(contact_shear_limit))
     impl::out_of_range("contacts' shear limit", contact_shear_limit, ">= 0 Pa (0 = none)");
+  if (!(crack_closure >= 0.0 && crack_closure <= 1.0))
+    impl::out_of_range("crack closure", crack_closure, "in [0, 1] (0 = off, 1 = at the links' initial distance)");
   if (!(rolling_friction >= 0.0) || !std::isfinite(rolling_friction))
     impl::out_of_range("contacts' rolling friction mu_r", rolling_friction, ">= 0 (0 = none)");
   if (!(rate_filter >= 0.0 && rate_filter <= 1.0))

@@ -476,9 +476,21 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
           from_set - dt * ((vb[0] - va[0]) * n[0] + (vb[1] - va[1]) * n[1] + (vb[2] - va[2]) * n[2]);
       const double fn_old = link_normal_force(delta_old, delta_max_old, law).fn;
       // with crack closure a compressed link's normal spring goes on as the
-      // contact's (the same K_n from the same rest distance): nothing of it
-      // is released
-      const double normal = mat.crack_closure && from_set < 0.0 ? 0.0 : 0.5 * fn_old * from_set;
+      // contact's (the same K_n) from the closing distance: the contact keeps
+      // the share (its overlap / the link's shortening)^2 of the spring's
+      // energy, all of it at c = 1 (the same rest distance); the rest is
+      // released
+      double normal = 0.5 * fn_old * from_set;
+      if (mat.crack_closure > 0.0 && from_set < 0.0)
+      {
+        // (the set of e_max at the step's start, as from_set's)
+        const double set =
+            compacting ? compaction_set(l.compaction[k], l.d0[k], link_compaction(l, k, mat.compaction)) : 0.0;
+        const double touch =
+            contact_spring(mat, cf, l, k, rec[record * i + 3], rec[record * l.b[k] + 3], compacting).touch;
+        const double share = std::clamp(1.0 - (l.d0[k] + set - touch) / -from_set, 0.0, 1.0);
+        normal *= 1.0 - share * share;
+      }
       s.broken[omp_get_thread_num()].emplace_back(k, wk * (normal + 0.5 * dot3(fs_old, trial.data()) / law.ks));
       std::fill(fs_old, fs_old + 3, 0.0);
       std::fill(out, out + 6, 0.0);

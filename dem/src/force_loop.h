@@ -98,9 +98,10 @@ inline ContactFactors contact_factors(const Material& m)
 /// A contact's springs: the distance from which its spheres push each other
 /// apart, and its normal and shear stiffnesses. Spheres touch from R_a + R_b,
 /// with the contacts' stiffnesses (equation [1] with the factors cf); with
-/// Material::crack_closure the spheres of a broken link touch from the
-/// link's initial distance, with the link's K_n and K_s (method.md 1.7). A
-/// broken compacted link's spheres touch closer by its set (1.6c).
+/// Material::crack_closure = c > 0 the spheres of a broken link touch from
+/// R_a + R_b + c (D_init - R_a - R_b), with the link's K_n and K_s
+/// (method.md 1.7). A broken compacted link's spheres touch closer by its
+/// set (1.6c).
 struct ContactSpring
 {
   double touch, kn, ks;
@@ -109,8 +110,9 @@ inline ContactSpring contact_spring(const Material& mat, const ContactFactors& c
                                     double ra, double rb, bool compacting)
 {
   const double rs = ra + rb;
-  const bool closing = mat.crack_closure && link >= 0;
-  double touch = closing ? l.d0[link] : rs;
+  const bool closing = mat.crack_closure > 0.0 && link >= 0;
+  // (D_init itself at c = 1)
+  double touch = closing ? l.d0[link] - (1.0 - mat.crack_closure) * (l.d0[link] - rs) : rs;
   if (compacting && link >= 0)
     touch += compaction_set(l.compaction[link], l.d0[link], link_compaction(l, link, mat.compaction));
   if (closing)

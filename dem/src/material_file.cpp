@@ -123,9 +123,9 @@ MaterialFile read_material(const std::filesystem::path& file)
   // optional: the contacts' rolling resistance (absent: none)
   if (j.contains("rolling_friction"))
     t.rolling_friction = get("rolling_friction");
-  // optional: broken links' spheres meet again at D_init (absent: at R_a + R_b)
+  // optional: where broken links' spheres meet again (absent: at R_a + R_b)
   if (j.contains("crack_closure"))
-    t.crack_closure = get_bool("crack_closure");
+    t.crack_closure = get("crack_closure");
   // optional: compaction (absent: none)
   if (j.contains("compaction_onset"))
   {
@@ -182,8 +182,8 @@ void write_material(const std::filesystem::path& file, const MaterialFile& m)
     j["contact_shear_limit_pa"] = t.contact_shear_limit;
   if (t.rolling_friction > 0.0)
     j["rolling_friction"] = t.rolling_friction;
-  if (t.crack_closure)
-    j["crack_closure"] = true;
+  if (t.crack_closure > 0.0)
+    j["crack_closure"] = t.crack_closure;
   if (t.compaction.on())
   {
     j["compaction_onset"] = t.compaction.onset;

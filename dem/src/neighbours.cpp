@@ -308,22 +308,24 @@ void NeighbourList::build(std::span<const double> x, std::span<const double> r, 
   ++_builds;
 }
 
-void NeighbourList::close_cracks()
+void NeighbourList::close_cracks(double c)
 {
-  _closure = true;
+  if (!(c > 0.0 && c <= 1.0))
+    throw std::runtime_error("neighbour list: crack closure " + std::to_string(c) + ": must be in (0, 1]");
+  _closure = c;
   _reach_known = false;
 }
 
 double NeighbourList::reach(std::span<const double> r, const Links& links)
 {
-  if (!_closure)
+  if (!(_closure > 0.0))
     return 0.0;
   if (!_reach_known)
   {
     // (the links' initial distances never change: once per list)
     _reach = 0.0;
     for (std::size_t k = 0; k < links.size(); ++k)
-      _reach = std::max(_reach, links.d0[k] - r[links.a[k]] - r[links.b[k]]);
+      _reach = std::max(_reach, _closure * (links.d0[k] - r[links.a[k]] - r[links.b[k]]));
     _reach_known = true;
   }
   return _reach;
@@ -331,7 +333,7 @@ double NeighbourList::reach(std::span<const double> r, const Links& links)
 
 bool NeighbourList::keeps(double d2, double rs, const Links& links, std::int32_t k) const
 {
-  const double touch = _closure && k >= 0 ? std::max(rs, links.d0[k]) : rs;
+  const double touch = _closure > 0.0 && k >= 0 ? std::max(rs, links.d0[k] - (1.0 - _closure) * (links.d0[k] - rs)) : rs;
   const double lim = touch + _skin;
   return d2 < lim * lim;
 }

@@ -23,8 +23,8 @@ DemSolver::DemSolver(Particles& p, Links& l, const Material& mat, double dt, dou
       _c(0.0)
 {
   mat.validate();
-  if (mat.crack_closure)
-    _nl.close_cracks();
+  if (mat.crack_closure > 0.0)
+    _nl.close_cracks(mat.crack_closure);
   if (!(dt > 0.0) || !std::isfinite(dt))
     throw std::runtime_error("time step " + std::to_string(dt) + " s: must be > 0");
   set_damping(damping);

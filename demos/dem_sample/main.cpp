@@ -92,8 +92,10 @@ int main(int argc, char** argv)
   demo::add_number(app, "--contact-shear-limit", m.contact_shear_limit,
                    "Tresca limit of the contacts' friction, beside F_c tan(phi_c) [Pa]",
                    Allowed::positive(1e12).or_value(0.0, "none"));
-  app.add_flag("--crack-closure", m.crack_closure,
-               "a broken link's spheres meet again at the link's initial distance, with its stiffnesses");
+  demo::add_number(app, "--crack-closure", m.crack_closure,
+                   "crack closure: the share of a broken link's gap at rest, D_init - (R_a + R_b), at which its "
+                   "spheres meet again, with the link's stiffnesses [-]; 1 = at D_init",
+                   Allowed::above(0.0, 1.0).or_value(0.0, "off"));
   demo::add_number(app, "--rolling-friction", m.rolling_friction,
                    "rolling resistance of the contacts: mu_r of the cap |M| <= mu_r R* F_c [-]",
                    Allowed::positive(10.0).or_value(0.0, "none"));

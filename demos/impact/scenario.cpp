@@ -355,9 +355,9 @@ MaterialSpec read_material_section(Reader& r, const std::filesystem::path& scena
   c.contact_shear_limit = r.number("contact_shear_limit_pa", c.contact_shear_limit,
                                    Allowed::positive(1e12).or_value(0.0, "no limit"),
                                    "Tresca limit of the contacts' friction: their largest shear stress [Pa]");
-  c.crack_closure = r.boolean("crack_closure", c.crack_closure,
-                              "a broken link's spheres meet again at the link's initial distance, with its "
-                              "stiffnesses (the crack closes)");
+  c.crack_closure = r.number("crack_closure", c.crack_closure, Allowed::above(0.0, 1.0).or_value(0.0, "off"),
+                             "crack closure: the share of a broken link's gap at rest, D_init - (R_a + R_b), at "
+                             "which its spheres meet again, with the link's stiffnesses [-]; 1 = at D_init");
   c.rolling_friction = r.number("rolling_friction", c.rolling_friction, Allowed::positive(10.0).or_value(0.0, "none"),
                                 "rolling resistance of the contacts: mu_r of the cap |M| <= mu_r R* F_c [-]");
   c.rate_fc = r.number("rate_fc_pa", c.rate_fc, Allowed::positive(1e10).or_value(0.0, "no rate effect"),

@@ -31,12 +31,13 @@ struct Material
   /// the largest shear stress a contact carries, over its S_int [Pa]; 0 =
   /// none (Coulomb friction at any pressure).
   double contact_shear_limit = 0.0;
-  /// Whether the spheres of a broken link meet again where the link was at
-  /// rest, at its initial distance (the crack closes; docs/method.md 1.7),
-  /// with the link's K_n and K_s, instead of at R_a + R_b with the contacts'
-  /// stiffnesses. A link that breaks in shear while compressed then keeps its
-  /// normal force, as a contact.
-  bool crack_closure = false;
+  /// Crack closure (docs/method.md 1.7): the share c in [0, 1] of a broken
+  /// link's gap at rest, D_init - (R_a + R_b), at which its spheres meet
+  /// again: they touch from R_a + R_b + c (D_init - R_a - R_b), with the
+  /// link's K_n and K_s. 1: where the link was at rest (a link that breaks
+  /// in shear while compressed keeps its normal force, as a contact); 0, the
+  /// default: off (they touch at R_a + R_b, with the contacts' stiffnesses).
+  double crack_closure = 0.0;
   /// Rolling resistance of the contacts (docs/method.md section 1.7d): the
   /// coefficient mu_r of the cap |M| <= mu_r R* F_c on the rolling moment,
   /// R* = R_a R_b / (R_a + R_b) [-]; 0 = none (the spheres roll freely).

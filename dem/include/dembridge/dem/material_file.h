@@ -20,7 +20,7 @@
 ///       "rate_current": true,
 ///       "contact_shear_limit_pa": 1.7e8,  optional: the contacts' Tresca limit (1.7)
 ///       "rolling_friction": 0.1,          optional: the contacts' rolling resistance mu_r (1.7d)
-///       "crack_closure": true,            optional: broken links close at D_init (1.7)
+///       "crack_closure": 1,               optional: where broken links close, in [0, 1] (1.7)
 ///       "compaction_onset": 0.004,        optional, with the next two: compaction (1.6c)
 ///       "compaction_stiffness": 0.3,
 ///       "compaction_lock": 0.04,

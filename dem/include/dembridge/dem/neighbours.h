@@ -167,11 +167,12 @@ public:
   void keep_rolling();
   bool rolling() const { return _rolling; }
   /// From the next search on the list also keeps each pair of a broken
-  /// link while its distance is below the link's initial one plus the skin
-  /// (Material::crack_closure: such a pair touches again from there). The
-  /// search then reaches that much farther for every sphere.
-  void close_cracks();
-  bool closing_cracks() const { return _closure; }
+  /// link while its distance is below R_a + R_b + c (D_init - R_a - R_b)
+  /// plus the skin (Material::crack_closure = c in (0, 1]: such a pair
+  /// touches again from there). The search then reaches that much farther
+  /// for every sphere.
+  void close_cracks(double c);
+  double closing_cracks() const { return _closure; }
   /// The pairs, their contact history and the build state, to a checkpoint.
   void save(const checkpoint::Group& g) const;
   /// Reads what save() wrote (the skin must be the same).
@@ -204,12 +205,12 @@ private:
   double _cell = 0.0;              // the grid's cell size at the last build
   bool _stale = false;             // rebuild at the next update
   bool _rolling = false;           // mr is kept
-  bool _closure = false;           // broken links' pairs kept to D_init + skin
-  double _reach = 0.0;             // the most a link's D_init exceeds R_a + R_b (with _closure) [m]
+  double _closure = 0.0;           // c: broken links' pairs kept to R_a + R_b + c (D_init - R_a - R_b) + skin
+  double _reach = 0.0;             // the most c (D_init - R_a - R_b) of a link (with _closure) [m]
   bool _reach_known = false;
   double reach(std::span<const double> r, const Links& links);
   /// A pair at squared distance d2 within the list's reach: gap below the skin,
-  /// from R_a + R_b, or with _closure from a broken link's D_init.
+  /// from R_a + R_b, or with _closure from a broken link's closing distance.
   bool keeps(double d2, double rs, const Links& links, std::int32_t k) const;
   std::vector<std::uint8_t> _skip; // the spheres left out of the last build
   std::optional<CellGrid> _grid;
