@@ -18,8 +18,12 @@ series with 10-30 % scatter: envelopes, not exact values.
 Runs build/bin/impact SCENARIO --set projectile.velocity_m_s=V for each V
 into OUT/v<V>/ (a run already complete is not redone), and writes
 OUT/penetration.json and OUT/penetration.csv: the depth run and the two
-formulas' at each speed. f_c is the material file's measured compressive
-strength (its "macroscopic" block), or --fc.
+formulas' at each speed, and how far the projectile left its path (the tip's
+distance from it at the end, `off_path_m`, and the largest speed across it,
+`across_path_max_m_s`: the formulas are for a projectile that keeps to its
+path). A block thinner than 3 x the depth (run or formulas') is flagged. f_c
+is the material file's measured compressive strength (its "macroscopic"
+block), or --fc.
 
 Usage: /usr/bin/python3 scripts/penetration.py SCENARIO OUT V1 V2 ... [--set KEY=VALUE ...]
        [--fc PA] [--impact build/bin/impact]
@@ -60,6 +64,23 @@ def li_chen(M, d, psi, rho, fc, V):
     return d * math.sqrt(4 * k * I / math.pi * (1 + math.pi * k / (4 * N)) / (1 + I / N))
 
 
+def off_path(history_csv, aim, obliquity_deg):
+    """The tip's distance from the intended path (the line through (aim, 0)
+    along (sin th, 0, -cos th)) at the last row of a history, and the
+    largest speed across that path over the run [m, m/s]."""
+    th = math.radians(obliquity_deg)
+    u = (math.sin(th), 0.0, -math.cos(th))
+    across = 0.0
+    with open(history_csv) as f:
+        for row in csv.DictReader(f):
+            v = [float(row[f"velocity_{c}_m_s"]) for c in "xyz"]
+            along = sum(a * b for a, b in zip(v, u))
+            across = max(across, math.sqrt(max(0.0, sum(c * c for c in v) - along * along)))
+            r = [float(row["tip_x_m"]) - aim[0], float(row["tip_y_m"]) - aim[1], float(row["tip_z_m"])]
+    along = sum(a * b for a, b in zip(r, u))
+    return math.sqrt(max(0.0, sum(c * c for c in r) - along * along)), across
+
+
 def main(argv):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scenario")
@@ -89,9 +110,15 @@ def main(argv):
                      "particles": s["particles"], "imbalance_share": s["energy"]["imbalance_share"],
                      "wall_s": s["wall_s"], "fc_pa": fc})
         r = rows[-1]
+        r["off_path_m"], r["across_path_max_m_s"] = off_path(os.path.join(d, "history.csv"), sc["projectile.aim_m"],
+                                                             sc["projectile.obliquity_deg"])
+        # the formulas are for a semi-infinite target: the issue's rule, thickness >= 3 x the depth
+        thin = sc["target.thickness_m"] < 3 * max(r["depth_m"], xf, xl)
         print(f"{V:7.1f} m/s: depth {1e3 * r['depth_m']:6.1f} mm, Forrestal {1e3 * xf:6.1f} mm "
-              f"({100 * r['to_forrestal']:+.0f} %), Li-Chen {1e3 * xl:6.1f} mm ({100 * r['to_li_chen']:+.0f} %)"
-              + ("  PERFORATED: the block is too thin" if s["perforated"] else ""))
+              f"({100 * r['to_forrestal']:+.0f} %), Li-Chen {1e3 * xl:6.1f} mm ({100 * r['to_li_chen']:+.0f} %); "
+              f"tip {1e3 * r['off_path_m']:.1f} mm off the path, at most {r['across_path_max_m_s']:.1f} m/s across it"
+              + ("  PERFORATED: the block is too thin" if s["perforated"] else "")
+              + (f"  (the block, {sc['target.thickness_m']:g} m, is thinner than 3 x the depth)" if thin else ""))
     with open(os.path.join(args.out, "penetration.json"), "w") as f:
         json.dump(rows, f, indent=2)
     with open(os.path.join(args.out, "penetration.csv"), "w", newline="") as f:

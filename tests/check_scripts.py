@@ -16,7 +16,10 @@
   grid err by about 1e-5), and its --bands resistance over 10 mm bands
   of the 1000 m/s history within 1 % of R + N rho v^2 at the band's rms
   speed (the force varies by a few % across a band; the energy drop over
-  the band is the force's mean, the rms speed's square its speed term's).
+  the band is the force's mean, the rms speed's square its speed term's);
+- scripts/penetration.py's off_path: a history whose tip moves along an
+  oblique path (30 degrees, aimed off the origin) plus a known drift across
+  it gives that drift's final distance and its largest speed, to 1e-12.
 Usage: check_scripts.py SOURCE_DIR"""
 import math
 import os
@@ -71,4 +74,21 @@ for b0, b1, vb, pb in rows:
         problems.append(f"resistance band {b0}-{b1}: {pb} Pa instead of {want}")
 for q in problems:
     print(q)
+# off_path: the tip at aim + s u + e w, w = (0, 1, 0) across the path u
+import csv  # noqa: E402
+import tempfile  # noqa: E402
+th = math.radians(30.0)
+u, aim = (math.sin(th), 0.0, -math.cos(th)), (0.01, -0.02)
+with tempfile.TemporaryDirectory() as tmp:
+    hist = os.path.join(tmp, "history.csv")
+    with open(hist, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["time_s", "tip_x_m", "tip_y_m", "tip_z_m", "velocity_x_m_s", "velocity_y_m_s", "velocity_z_m_s"])
+        for k, (s_, e, c) in enumerate(((0.0, 0.0, 0.0), (0.05, 0.001, 7.5), (0.1, 0.004, -3.0))):
+            w.writerow([1e-4 * k, aim[0] + s_ * u[0], aim[1] + e, s_ * u[2],
+                        400 * u[0], c, 400 * u[2]])
+    off, across = penetration.off_path(hist, aim, 30.0)
+print(f"off_path of a synthetic history: {1e3 * off:.6f} mm off, {across:.6f} m/s across")
+if abs(off - 0.004) > 1e-12 or abs(across - 7.5) > 1e-12:
+    problems.append(f"off_path: {off} m and {across} m/s instead of 0.004 m and 7.5 m/s")
 sys.exit(1 if problems else 0)
