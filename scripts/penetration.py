@@ -21,9 +21,9 @@ OUT/penetration.json and OUT/penetration.csv: the depth run and the two
 formulas' at each speed, and how far the projectile left its path (the tip's
 distance from it at the end, `off_path_m`, and the largest speed across it,
 `across_path_max_m_s`: the formulas are for a projectile that keeps to its
-path). A block thinner than 3 x the depth (run or formulas') is flagged. f_c
-is the material file's measured compressive strength (its "macroscopic"
-block), or --fc.
+path). A block thinner than 3 x the depth (the run's or the formulas') is
+flagged (`thin_block`). f_c is the material file's measured compressive
+strength (its "macroscopic" block), or --fc.
 
 Usage: /usr/bin/python3 scripts/penetration.py SCENARIO OUT V1 V2 ... [--set KEY=VALUE ...]
        [--fc PA] [--impact build/bin/impact]
@@ -70,15 +70,19 @@ def off_path(history_csv, aim, obliquity_deg):
     largest speed across that path over the run [m, m/s]."""
     th = math.radians(obliquity_deg)
     u = (math.sin(th), 0.0, -math.cos(th))
-    across = 0.0
+
+    def across_u(w):  # the length of w's part across u
+        along = sum(a * b for a, b in zip(w, u))
+        return math.sqrt(sum((c - along * e) ** 2 for c, e in zip(w, u)))
+
+    speed, tip = 0.0, None
     with open(history_csv) as f:
         for row in csv.DictReader(f):
-            v = [float(row[f"velocity_{c}_m_s"]) for c in "xyz"]
-            along = sum(a * b for a, b in zip(v, u))
-            across = max(across, math.sqrt(max(0.0, sum(c * c for c in v) - along * along)))
-            r = [float(row["tip_x_m"]) - aim[0], float(row["tip_y_m"]) - aim[1], float(row["tip_z_m"])]
-    along = sum(a * b for a, b in zip(r, u))
-    return math.sqrt(max(0.0, sum(c * c for c in r) - along * along)), across
+            speed = max(speed, across_u([float(row[f"velocity_{c}_m_s"]) for c in "xyz"]))
+            tip = [float(row["tip_x_m"]) - aim[0], float(row["tip_y_m"]) - aim[1], float(row["tip_z_m"])]
+    if tip is None:
+        raise ValueError(f"{history_csv}: no rows")
+    return across_u(tip), speed
 
 
 def main(argv):
@@ -113,7 +117,7 @@ def main(argv):
         r["off_path_m"], r["across_path_max_m_s"] = off_path(os.path.join(d, "history.csv"), sc["projectile.aim_m"],
                                                              sc["projectile.obliquity_deg"])
         # the formulas are for a semi-infinite target: the issue's rule, thickness >= 3 x the depth
-        thin = sc["target.thickness_m"] < 3 * max(r["depth_m"], xf, xl)
+        thin = r["thin_block"] = sc["target.thickness_m"] < 3 * max(r["depth_m"], xf, xl)
         print(f"{V:7.1f} m/s: depth {1e3 * r['depth_m']:6.1f} mm, Forrestal {1e3 * xf:6.1f} mm "
               f"({100 * r['to_forrestal']:+.0f} %), Li-Chen {1e3 * xl:6.1f} mm ({100 * r['to_li_chen']:+.0f} %); "
               f"tip {1e3 * r['off_path_m']:.1f} mm off the path, at most {r['across_path_max_m_s']:.1f} m/s across it"

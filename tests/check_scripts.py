@@ -19,7 +19,8 @@
   the band is the force's mean, the rms speed's square its speed term's);
 - scripts/penetration.py's off_path: a history whose tip moves along an
   oblique path (30 degrees, aimed off the origin) plus a known drift across
-  it gives that drift's final distance and its largest speed, to 1e-12.
+  it, in both directions across and largest before the end, gives that
+  drift's final distance and its largest speed, to 1e-12.
 Usage: check_scripts.py SOURCE_DIR"""
 import math
 import os
@@ -72,23 +73,27 @@ for b0, b1, vb, pb in rows:
     print(f"band {1e3 * b0:.0f}-{1e3 * b1:.0f} mm: {vb:.0f} m/s, {pb / 1e6:.1f} MPa (law {want / 1e6:.1f})")
     if abs(pb / want - 1) > 0.01:
         problems.append(f"resistance band {b0}-{b1}: {pb} Pa instead of {want}")
-for q in problems:
-    print(q)
-# off_path: the tip at aim + s u + e w, w = (0, 1, 0) across the path u
+# off_path: the tip at (aim, 0) + s u + e1 w1 + e2 w2, the velocity 400 u + c1 w1
+# + c2 w2, with w1 = (0, 1, 0) and w2 = (cos th, 0, sin th) across the path u;
+# the drift peaks before the last row, so the final distance (2 mm) and the
+# largest speed across (10 m/s) are each told apart from the other readings
 import csv  # noqa: E402
 import tempfile  # noqa: E402
 th = math.radians(30.0)
-u, aim = (math.sin(th), 0.0, -math.cos(th)), (0.01, -0.02)
+u, w2, aim = (math.sin(th), 0.0, -math.cos(th)), (math.cos(th), 0.0, math.sin(th)), (0.01, -0.02)
 with tempfile.TemporaryDirectory() as tmp:
     hist = os.path.join(tmp, "history.csv")
     with open(hist, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["time_s", "tip_x_m", "tip_y_m", "tip_z_m", "velocity_x_m_s", "velocity_y_m_s", "velocity_z_m_s"])
-        for k, (s_, e, c) in enumerate(((0.0, 0.0, 0.0), (0.05, 0.001, 7.5), (0.1, 0.004, -3.0))):
-            w.writerow([1e-4 * k, aim[0] + s_ * u[0], aim[1] + e, s_ * u[2],
-                        400 * u[0], c, 400 * u[2]])
+        rows_ = ((0.0, 0.0, 0.0, 0.0, 0.0), (0.05, 0.003, 0.004, 6.0, 8.0), (0.1, 0.0012, 0.0016, -1.8, 2.4))
+        for k, (s_, e1, e2, c1, c2) in enumerate(rows_):
+            w.writerow([1e-4 * k] + [aim[0] + s_ * u[0] + e2 * w2[0], aim[1] + e1, s_ * u[2] + e2 * w2[2]]
+                       + [400 * u[0] + c2 * w2[0], c1, 400 * u[2] + c2 * w2[2]])
     off, across = penetration.off_path(hist, aim, 30.0)
 print(f"off_path of a synthetic history: {1e3 * off:.6f} mm off, {across:.6f} m/s across")
-if abs(off - 0.004) > 1e-12 or abs(across - 7.5) > 1e-12:
-    problems.append(f"off_path: {off} m and {across} m/s instead of 0.004 m and 7.5 m/s")
+if abs(off - 0.002) > 1e-12 or abs(across - 10.0) > 1e-12:
+    problems.append(f"off_path: {off} m and {across} m/s instead of 0.002 m and 10 m/s")
+for q in problems:
+    print(q)
 sys.exit(1 if problems else 0)
