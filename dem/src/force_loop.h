@@ -2,6 +2,7 @@
 // Internal to dem/: how the force loop shares its items between threads, and
 // the scratch space it keeps between calls.
 #include "dembridge/dem/forces.h"
+#include "pairs.h"
 
 #include <climits>
 #include <cstdint>
@@ -111,8 +112,7 @@ inline ContactSpring contact_spring(const Material& mat, const ContactFactors& c
 {
   const double rs = ra + rb;
   const bool closing = mat.crack_closure > 0.0 && link >= 0;
-  // (D_init itself at c = 1)
-  double touch = closing ? l.d0[link] - (1.0 - mat.crack_closure) * (l.d0[link] - rs) : rs;
+  double touch = closing ? closing_distance(l.d0[link], rs, mat.crack_closure) : rs;
   if (compacting && link >= 0)
     touch += compaction_set(l.compaction[link], l.d0[link], link_compaction(l, link, mat.compaction));
   if (closing)

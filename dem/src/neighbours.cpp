@@ -325,7 +325,10 @@ double NeighbourList::reach(std::span<const double> r, const Links& links)
     // (the links' initial distances never change: once per list)
     _reach = 0.0;
     for (std::size_t k = 0; k < links.size(); ++k)
-      _reach = std::max(_reach, _closure * (links.d0[k] - r[links.a[k]] - r[links.b[k]]));
+    {
+      const double rs = r[links.a[k]] + r[links.b[k]];
+      _reach = std::max(_reach, impl::closing_distance(links.d0[k], rs, _closure) - rs);
+    }
     _reach_known = true;
   }
   return _reach;
@@ -333,7 +336,7 @@ double NeighbourList::reach(std::span<const double> r, const Links& links)
 
 bool NeighbourList::keeps(double d2, double rs, const Links& links, std::int32_t k) const
 {
-  const double touch = _closure > 0.0 && k >= 0 ? std::max(rs, links.d0[k] - (1.0 - _closure) * (links.d0[k] - rs)) : rs;
+  const double touch = _closure > 0.0 && k >= 0 ? std::max(rs, impl::closing_distance(links.d0[k], rs, _closure)) : rs;
   const double lim = touch + _skin;
   return d2 < lim * lim;
 }

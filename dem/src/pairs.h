@@ -8,6 +8,13 @@
 
 namespace dembridge::dem::impl
 {
+/// Crack closure (Material::crack_closure = c in (0, 1], method.md 1.7): the
+/// distance from which the spheres of a broken link, D_init apart at rest
+/// and rs = R_a + R_b, touch again: D_init - (1 - c) (D_init - rs), D_init
+/// itself at c = 1. The force loop's contacts and the neighbour list's reach
+/// both take it from here.
+inline double closing_distance(double d0, double rs, double c) { return d0 - (1.0 - c) * (d0 - rs); }
+
 /// first[i]: the start of the items with a = i, so they are
 /// [first[i], first[i + 1]). @throws std::runtime_error naming `what` if the
 /// items are not sorted by (a, b) without repeats or not 0 <= a < b < np.
