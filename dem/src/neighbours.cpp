@@ -6,6 +6,7 @@
 #include "pairs.h"
 #include "threads.h"
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -18,16 +19,16 @@ CellGrid::CellGrid(std::span<const double> x, double cell, std::span<const std::
     throw std::runtime_error("cell grid: cell size " + std::to_string(cell) + " must be > 0");
   const std::size_t n = x.size() / 3;
   auto kept = [&](std::size_t i) { return skip.empty() || !skip[i]; };
-  double hi[3];
-  std::size_t first = 0;
-  while (first < n && !kept(first))
-    ++first;
+  // the bounds of the kept centres (min and max: the same in any order)
+  double lo[3], hi[3];
   for (int k = 0; k < 3; ++k)
   {
-    _lo[k] = first < n ? x[3 * first + k] : 0.0;
-    hi[k] = _lo[k];
+    lo[k] = std::numeric_limits<double>::infinity();
+    hi[k] = -lo[k];
   }
   std::size_t count = 0;
+#pragma omp parallel for schedule(static) reduction(min : lo[:3]) reduction(max : hi[:3]) reduction(+ : count) \
+  num_threads(impl::threads_for(n))
   for (std::size_t i = 0; i < n; ++i)
   {
     if (!kept(i))
@@ -35,9 +36,15 @@ CellGrid::CellGrid(std::span<const double> x, double cell, std::span<const std::
     ++count;
     for (int k = 0; k < 3; ++k)
     {
-      _lo[k] = std::min(_lo[k], x[3 * i + k]);
+      lo[k] = std::min(lo[k], x[3 * i + k]);
       hi[k] = std::max(hi[k], x[3 * i + k]);
     }
+  }
+  for (int k = 0; k < 3; ++k)
+  {
+    _lo[k] = count ? lo[k] : 0.0;
+    if (!count)
+      hi[k] = 0.0;
   }
   // cap the grid size for very spread-out sets (cells stay >= `cell`)
   _h = cell;
@@ -59,14 +66,14 @@ CellGrid::CellGrid(std::span<const double> x, double cell, std::span<const std::
   }
   _start.assign(total + 1, 0);
   std::vector<std::size_t> id(n);
+#pragma omp parallel for schedule(static) num_threads(impl::threads_for(n))
   for (std::size_t i = 0; i < n; ++i)
-  {
-    if (!kept(i))
-      continue;
-    id[i] = (std::size_t(cell_of(x[3 * i], 0)) * _n[1] + cell_of(x[3 * i + 1], 1)) * _n[2]
-            + cell_of(x[3 * i + 2], 2);
-    ++_start[id[i] + 1];
-  }
+    if (kept(i))
+      id[i] = (std::size_t(cell_of(x[3 * i], 0)) * _n[1] + cell_of(x[3 * i + 1], 1)) * _n[2]
+              + cell_of(x[3 * i + 2], 2);
+  for (std::size_t i = 0; i < n; ++i)
+    if (kept(i))
+      ++_start[id[i] + 1];
   for (std::size_t c = 0; c < total; ++c)
     _start[c + 1] += _start[c];
   _items.resize(count);
@@ -195,7 +202,7 @@ void NeighbourList::search_movers(std::span<const double> x, std::span<const dou
   // each mover's pairs with every sphere (a pair of two movers found by the
   // lower one), as (a, b, link); each thread a contiguous block of movers
   std::vector<Found> chunk(omp_get_max_threads());
-#pragma omp parallel num_threads(impl::threads_for(movers.size()))
+#pragma omp parallel num_threads(impl::threads_for_searches(movers.size()))
   {
     Found& out = chunk[omp_get_thread_num()];
 #pragma omp for schedule(static)
@@ -349,19 +356,7 @@ void NeighbourList::end_search()
   _pending = false;
 }
 
-/// The columns of the list a merge writes, zero (no history) until filled.
-struct NeighbourList::NewList
-{
-  NewList(std::size_t m, bool rolling)
-    : a(m), b(m), link(m), fs(3 * m), mr(rolling ? 3 * m : 0), n(3 * m), touching(m)
-  {
-  }
-  std::vector<std::int32_t> a, b, link;
-  std::vector<double> fs, mr, n;
-  std::vector<std::uint8_t> touching;
-};
-
-void NeighbourList::copy_pairs(std::size_t q0, std::size_t q1, NewList& out, std::size_t o) const
+void NeighbourList::copy_pairs(std::size_t q0, std::size_t q1, Columns& out, std::size_t o) const
 {
   if (q1 <= q0)
     return;
@@ -399,6 +394,59 @@ std::size_t NeighbourList::first_at_or_after(std::size_t q, std::int32_t i, std:
   return lo;
 }
 
+std::size_t NeighbourList::merge_chunk(std::size_t q0, std::size_t q1, std::span<const std::int32_t> na,
+                                       std::span<const std::int32_t> nb, std::span<const std::int32_t> nlink,
+                                       std::size_t p0, std::size_t p1, std::span<const std::uint8_t> moving,
+                                       bool replace_all, Columns* out, std::size_t o) const
+{
+  const std::size_t o0 = o;
+  // the listed pairs [r0, r1) that stay, copied in runs (into out, if any)
+  auto keep = [&](std::size_t r0, std::size_t r1)
+  {
+    if (replace_all)
+      return;
+    std::size_t run = r0;
+    if (!moving.empty())
+      for (std::size_t q = r0; q < r1; ++q)
+        if (moving[a[q]] || moving[b[q]])
+        {
+          if (out)
+            copy_pairs(run, q, *out, o);
+          o += q - run;
+          run = q + 1;
+        }
+    if (out)
+      copy_pairs(run, r1, *out, o);
+    o += r1 - run;
+  };
+  std::size_t q = q0;
+  for (std::size_t p = p0; p < p1; ++p, ++o)
+  {
+    const std::size_t at = first_at_or_after(q, na[p], nb[p]);
+    keep(q, at);
+    q = at;
+    const bool listed = q < q1 && a[q] == na[p] && b[q] == nb[p];
+    if (out && listed)
+      copy_pairs(q, q + 1, *out, o); // listed already: its history stays
+    else if (out)
+    {
+      out->a[o] = na[p];
+      out->b[o] = nb[p];
+      std::fill_n(out->fs.begin() + 3 * o, 3, 0.0);
+      if (_rolling)
+        std::fill_n(out->mr.begin() + 3 * o, 3, 0.0);
+      std::fill_n(out->n.begin() + 3 * o, 3, 0.0);
+      out->touching[o] = 0;
+    }
+    if (out)
+      out->link[o] = nlink[p];
+    if (listed)
+      ++q;
+  }
+  keep(q, q1);
+  return o - o0;
+}
+
 void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std::int32_t> nb,
                           std::span<const std::int32_t> nlink, std::span<const std::uint8_t> moving,
                           bool replace_all)
@@ -409,60 +457,61 @@ void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std:
   // pair always is: its gap is below the skin); a new pair already listed
   // keeps the listed one's history. The listed pairs between two new ones
   // are copied as runs.
+  //
+  // In parallel: chunk t takes the listed pairs [q[t], q[t + 1]) and the new
+  // ones that go among them, [p[t], p[t + 1]) (those after the listed pair
+  // q[t] - 1); a first pass counts each chunk's pairs, a second writes them
+  // from the sum of the counts before. The list is the same for any thread
+  // count.
   const std::size_t m = a.size();
-  NewList out((replace_all ? 0 : m) + na.size(), _rolling); // at most; cut to size below
-  std::size_t o = 0;
-  // the listed pairs [q0, q1) that stay, copied in runs
-  auto keep = [&](std::size_t q0, std::size_t q1)
+  const int nt = impl::threads_for(m + na.size());
+  std::vector<std::size_t> q(nt + 1), p(nt + 1), o(nt + 1, 0);
+  for (int t = 0; t <= nt; ++t)
+    q[t] = m * static_cast<std::size_t>(t) / static_cast<std::size_t>(nt);
+  p[0] = 0;
+  p[nt] = na.size();
+  for (int t = 1; t < nt; ++t)
   {
-    if (replace_all)
-      return;
-    std::size_t run = q0;
-    if (!moving.empty())
-      for (std::size_t q = q0; q < q1; ++q)
-        if (moving[a[q]] || moving[b[q]])
-        {
-          copy_pairs(run, q, out, o);
-          o += q - run;
-          run = q + 1;
-        }
-    copy_pairs(run, q1, out, o);
-    o += q1 - run;
-  };
-  std::size_t q = 0;
-  for (std::size_t p = 0; p < na.size(); ++p, ++o)
-  {
-    const std::size_t at = first_at_or_after(q, na[p], nb[p]);
-    keep(q, at);
-    q = at;
-    if (q < m && a[q] == na[p] && b[q] == nb[p])
+    p[t] = p[t - 1];
+    if (q[t] == 0)
+      continue;
+    // the first new pair after the listed pair q[t] - 1
+    const std::int32_t la = a[q[t] - 1], lb = b[q[t] - 1];
+    std::size_t lo = p[t], hi = na.size();
+    while (lo < hi)
     {
-      copy_pairs(q, q + 1, out, o); // listed already: its history stays
-      ++q;
+      const std::size_t mid = lo + (hi - lo) / 2;
+      if (na[mid] < la || (na[mid] == la && nb[mid] <= lb))
+        lo = mid + 1;
+      else
+        hi = mid;
     }
-    else
-    {
-      out.a[o] = na[p];
-      out.b[o] = nb[p];
-    }
-    out.link[o] = nlink[p];
+    p[t] = lo;
   }
-  keep(q, m);
-  a = std::move(out.a);
-  b = std::move(out.b);
-  link = std::move(out.link);
-  fs = std::move(out.fs);
-  mr = std::move(out.mr);
-  n = std::move(out.n);
-  touching = std::move(out.touching);
-  a.resize(o);
-  b.resize(o);
-  link.resize(o);
-  fs.resize(3 * o);
-  if (_rolling)
-    mr.resize(3 * o);
-  n.resize(3 * o);
-  touching.resize(o);
+#pragma omp parallel for schedule(static) num_threads(nt)
+  for (int t = 0; t < nt; ++t)
+    o[t + 1] = merge_chunk(q[t], q[t + 1], na, nb, nlink, p[t], p[t + 1], moving, replace_all, nullptr, 0);
+  for (int t = 0; t < nt; ++t)
+    o[t + 1] += o[t];
+  const std::size_t total = o[nt];
+  Columns& out = _spare;
+  out.a.resize(total);
+  out.b.resize(total);
+  out.link.resize(total);
+  out.fs.resize(3 * total);
+  out.mr.resize(_rolling ? 3 * total : 0);
+  out.n.resize(3 * total);
+  out.touching.resize(total);
+#pragma omp parallel for schedule(static) num_threads(nt)
+  for (int t = 0; t < nt; ++t)
+    merge_chunk(q[t], q[t + 1], na, nb, nlink, p[t], p[t + 1], moving, replace_all, &out, o[t]);
+  a.swap(out.a);
+  b.swap(out.b);
+  link.swap(out.link);
+  fs.swap(out.fs);
+  mr.swap(out.mr);
+  n.swap(out.n);
+  touching.swap(out.touching);
   ++_version;
 }
 
@@ -518,7 +567,10 @@ std::size_t NeighbourList::bytes() const
              * sizeof(std::int32_t)
          + (fs.capacity() + mr.capacity() + n.capacity() + _x_build.capacity() + _x_grid.capacity())
              * sizeof(double)
-         + touching.capacity() + _moving.capacity() + (_grid ? _grid->bytes() : 0);
+         + touching.capacity() + _moving.capacity() + (_grid ? _grid->bytes() : 0)
+         + (_spare.a.capacity() + _spare.b.capacity() + _spare.link.capacity()) * sizeof(std::int32_t)
+         + (_spare.fs.capacity() + _spare.mr.capacity() + _spare.n.capacity()) * sizeof(double)
+         + _spare.touching.capacity();
 }
 
 } // namespace dembridge::dem

@@ -43,15 +43,20 @@ void SweepIndex::build(std::size_t np, std::span<const std::int32_t> a,
     const std::size_t lo = bounds[t], hi = bounds[t + 1];
     cross_first[t + 1] = cross_first[t];
     for (std::size_t i = lo; i < hi; ++i)
-      for (std::int32_t k = first[i]; k < first[i + 1]; ++k)
-        if (static_cast<std::size_t>(b[k]) >= hi)
-        {
-          ++cross_first[t + 1];
-          ++in_first[b[k] + 1];
-          target.push_back(b[k]);
-          cross_i.push_back(static_cast<std::int32_t>(i));
-          cross_k.push_back(k);
-        }
+    {
+      // b is sorted within i: the cross items are the tail of i's items
+      std::int32_t k0 = first[i + 1];
+      while (k0 > first[i] && static_cast<std::size_t>(b[k0 - 1]) >= hi)
+        --k0;
+      for (std::int32_t k = k0; k < first[i + 1]; ++k)
+      {
+        ++cross_first[t + 1];
+        ++in_first[b[k] + 1];
+        target.push_back(b[k]);
+        cross_i.push_back(static_cast<std::int32_t>(i));
+        cross_k.push_back(k);
+      }
+    }
   }
   for (std::size_t i = 0; i < np; ++i)
     in_first[i + 1] += in_first[i];
@@ -59,11 +64,14 @@ void SweepIndex::build(std::size_t np, std::span<const std::int32_t> a,
   std::vector<std::int32_t> fill(in_first.begin(), in_first.end() - 1);
   for (std::size_t s = 0; s < target.size(); ++s) // slots are in item order
     in[fill[target[s]]++] = static_cast<std::int32_t>(s);
-  out.assign(max_out * target.size(), 0.0);
+  // (every slot is written by the sweep before it is read)
+  out.resize(max_out * target.size());
   std::int32_t most = 0;
   for (std::size_t i = 0; i < np; ++i)
     most = std::max(most, first[i + 1] - first[i]);
-  geometry.assign(nt, std::vector<double>(prepared * most));
+  geometry.resize(nt);
+  for (auto& g : geometry)
+    g.resize(prepared * most);
 }
 
 void set_min_spheres_per_thread_team(std::size_t n) { impl::min_items_per_team() = n; }

@@ -20,6 +20,12 @@ inline int threads_for(std::size_t n)
 {
   return n >= min_items_per_team() ? omp_get_max_threads() : 1;
 }
+/// The same for items that each cost a microsecond or more (a neighbour
+/// search around one sphere: 27 cells), where a team pays from a few dozen.
+inline int threads_for_searches(std::size_t n)
+{
+  return n >= std::min<std::size_t>(64, min_items_per_team()) ? omp_get_max_threads() : 1;
+}
 } // namespace dembridge::dem::impl
 
 namespace dembridge::dem::impl

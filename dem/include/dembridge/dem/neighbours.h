@@ -194,8 +194,20 @@ private:
                      const std::vector<std::int32_t>& movers, bool defer);
   void merge(std::span<const std::int32_t> na, std::span<const std::int32_t> nb,
              std::span<const std::int32_t> nlink, std::span<const std::uint8_t> moving, bool replace_all);
-  struct NewList; // a merge's output columns (neighbours.cpp)
-  void copy_pairs(std::size_t q0, std::size_t q1, NewList& out, std::size_t o) const;
+  /// The list's columns, as a merge writes them.
+  struct Columns
+  {
+    std::vector<std::int32_t> a, b, link;
+    std::vector<double> fs, mr, n;
+    std::vector<std::uint8_t> touching;
+  };
+  void copy_pairs(std::size_t q0, std::size_t q1, Columns& out, std::size_t o) const;
+  /// Merges chunk t of a merge (neighbours.cpp) into out from slot o, or with
+  /// out null only counts its pairs; returns the count.
+  std::size_t merge_chunk(std::size_t q0, std::size_t q1, std::span<const std::int32_t> na,
+                          std::span<const std::int32_t> nb, std::span<const std::int32_t> nlink,
+                          std::size_t p0, std::size_t p1, std::span<const std::uint8_t> moving,
+                          bool replace_all, Columns* out, std::size_t o) const;
   std::size_t first_at_or_after(std::size_t q, std::int32_t i, std::int32_t j) const;
   void end_search();
   double _skin;
@@ -212,6 +224,9 @@ private:
   /// A pair at squared distance d2 within the list's reach: gap below the skin,
   /// from R_a + R_b, or with _closure from a broken link's closing distance.
   bool keeps(double d2, double rs, const Links& links, std::int32_t k) const;
+  // the columns a merge writes into, then swaps with the list's: the list's
+  // previous columns, kept so that a merge neither allocates nor clears
+  Columns _spare;
   std::vector<std::uint8_t> _skip; // the spheres left out of the last build
   std::optional<CellGrid> _grid;
   // the movers of the last search (flag per sphere, cleared by end_search)
