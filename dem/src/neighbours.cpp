@@ -19,7 +19,8 @@ CellGrid::CellGrid(std::span<const double> x, double cell, std::span<const std::
     throw std::runtime_error("cell grid: cell size " + std::to_string(cell) + " must be > 0");
   const std::size_t n = x.size() / 3;
   auto kept = [&](std::size_t i) { return skip.empty() || !skip[i]; };
-  // the bounds of the kept centres (min and max: the same in any order)
+  // the bounds of the kept centres (min and max: the same in any order, but
+  // for the sign of a zero bound, which changes no cell)
   double lo[3], hi[3];
   for (int k = 0; k < 3; ++k)
   {
@@ -370,19 +371,19 @@ void NeighbourList::copy_pairs(std::size_t q0, std::size_t q1, Columns& out, std
   std::copy(touching.begin() + q0, touching.begin() + q1, out.touching.begin() + o);
 }
 
-std::size_t NeighbourList::first_at_or_after(std::size_t q, std::int32_t i, std::int32_t j) const
+std::size_t NeighbourList::first_at_or_after(std::size_t q, std::size_t end, std::int32_t i, std::int32_t j) const
 {
-  // galloping from q, then bisection: a dense merge steps, a sparse one jumps
+  // the first listed pair in [q, end) not below (i, j), or end: galloping
+  // from q, then bisection (a dense merge steps, a sparse one jumps)
   auto less = [&](std::size_t k) { return a[k] < i || (a[k] == i && b[k] < j); };
-  const std::size_t m = a.size();
   std::size_t lo = q, hi = q, step = 1;
-  while (hi < m && less(hi))
+  while (hi < end && less(hi))
   {
     lo = hi + 1;
     hi += step;
     step *= 2;
   }
-  hi = std::min(hi, m);
+  hi = std::min(hi, end);
   while (lo < hi)
   {
     const std::size_t mid = lo + (hi - lo) / 2;
@@ -422,7 +423,7 @@ std::size_t NeighbourList::merge_chunk(std::size_t q0, std::size_t q1, std::span
   std::size_t q = q0;
   for (std::size_t p = p0; p < p1; ++p, ++o)
   {
-    const std::size_t at = first_at_or_after(q, na[p], nb[p]);
+    const std::size_t at = first_at_or_after(q, q1, na[p], nb[p]);
     keep(q, at);
     q = at;
     const bool listed = q < q1 && a[q] == na[p] && b[q] == nb[p];
@@ -488,12 +489,16 @@ void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std:
     }
     p[t] = lo;
   }
+  // (one chunk: no count, the columns sized for the most it can give)
+  if (nt > 1)
+  {
 #pragma omp parallel for schedule(static) num_threads(nt)
-  for (int t = 0; t < nt; ++t)
-    o[t + 1] = merge_chunk(q[t], q[t + 1], na, nb, nlink, p[t], p[t + 1], moving, replace_all, nullptr, 0);
-  for (int t = 0; t < nt; ++t)
-    o[t + 1] += o[t];
-  const std::size_t total = o[nt];
+    for (int t = 0; t < nt; ++t)
+      o[t + 1] = merge_chunk(q[t], q[t + 1], na, nb, nlink, p[t], p[t + 1], moving, replace_all, nullptr, 0);
+    for (int t = 0; t < nt; ++t)
+      o[t + 1] += o[t];
+  }
+  const std::size_t total = nt > 1 ? o[nt] : (replace_all ? 0 : m) + na.size();
   Columns& out = _spare;
   out.a.resize(total);
   out.b.resize(total);
@@ -502,9 +507,17 @@ void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std:
   out.mr.resize(_rolling ? 3 * total : 0);
   out.n.resize(3 * total);
   out.touching.resize(total);
-#pragma omp parallel for schedule(static) num_threads(nt)
+  std::size_t written = 0;
+#pragma omp parallel for schedule(static) num_threads(nt) reduction(+ : written)
   for (int t = 0; t < nt; ++t)
-    merge_chunk(q[t], q[t + 1], na, nb, nlink, p[t], p[t + 1], moving, replace_all, &out, o[t]);
+    written += merge_chunk(q[t], q[t + 1], na, nb, nlink, p[t], p[t + 1], moving, replace_all, &out, o[t]);
+  out.a.resize(written);
+  out.b.resize(written);
+  out.link.resize(written);
+  out.fs.resize(3 * written);
+  out.mr.resize(_rolling ? 3 * written : 0);
+  out.n.resize(3 * written);
+  out.touching.resize(written);
   a.swap(out.a);
   b.swap(out.b);
   link.swap(out.link);

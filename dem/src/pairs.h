@@ -20,7 +20,8 @@ inline double closing_distance(double d0, double rs, double c) { return d0 - (1.
 /// first[i]: the start of the items with a = i, so they are
 /// [first[i], first[i + 1]). @throws std::runtime_error naming `what` if the
 /// items are not sorted by (a, b) without repeats or not 0 <= a < b < np.
-/// In parallel: item k sets first[i] for the spheres i in (a[k - 1], a[k]].
+/// In parallel: the items are checked first; then item k sets first[i] for
+/// the spheres i in (a[k - 1], a[k]].
 inline std::vector<std::int32_t> first_by_a(std::size_t np, std::span<const std::int32_t> a,
                                             std::span<const std::int32_t> b,
                                             const std::string& what)
@@ -28,24 +29,21 @@ inline std::vector<std::int32_t> first_by_a(std::size_t np, std::span<const std:
   const std::size_t m = a.size();
   auto sorted = [&](std::size_t k) { return k == 0 || a[k] > a[k - 1] || (a[k] == a[k - 1] && b[k] > b[k - 1]); };
   auto in_range = [&](std::size_t k) { return a[k] >= 0 && b[k] > a[k] && static_cast<std::size_t>(b[k]) < np; };
-  std::vector<std::int32_t> first(np + 1, 0);
   std::size_t bad = m; // the first item out of order or range
 #pragma omp parallel for schedule(static) reduction(min : bad) num_threads(threads_for(m))
   for (std::size_t k = 0; k < m; ++k)
-  {
     if (!sorted(k) || !in_range(k))
-    {
       bad = std::min(bad, k);
-      continue;
-    }
-    for (std::int32_t i = k == 0 ? 0 : std::max(a[k - 1] + 1, 0); i <= a[k]; ++i)
-      first[i] = static_cast<std::int32_t>(k);
-  }
   if (bad < m && !sorted(bad))
     throw std::runtime_error(what + " must be sorted by (a, b) without repeats (item " + std::to_string(bad) + ")");
   if (bad < m)
     throw std::runtime_error(what + ": item " + std::to_string(bad) + " (" + std::to_string(a[bad]) + ", "
                              + std::to_string(b[bad]) + ") needs 0 <= a < b < " + std::to_string(np));
+  std::vector<std::int32_t> first(np + 1);
+#pragma omp parallel for schedule(static) num_threads(threads_for(m))
+  for (std::size_t k = 0; k < m; ++k)
+    for (std::int32_t i = k == 0 ? 0 : a[k - 1] + 1; i <= a[k]; ++i)
+      first[i] = static_cast<std::int32_t>(k);
   for (std::size_t i = m == 0 ? 0 : static_cast<std::size_t>(a[m - 1]) + 1; i <= np; ++i)
     first[i] = static_cast<std::int32_t>(m);
   return first;

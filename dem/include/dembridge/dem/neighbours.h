@@ -202,13 +202,14 @@ private:
     std::vector<std::uint8_t> touching;
   };
   void copy_pairs(std::size_t q0, std::size_t q1, Columns& out, std::size_t o) const;
-  /// Merges chunk t of a merge (neighbours.cpp) into out from slot o, or with
-  /// out null only counts its pairs; returns the count.
+  /// One chunk of a merge (neighbours.cpp): the listed pairs [q0, q1) and the
+  /// new pairs [p0, p1) that go among them, written into out from slot o, or
+  /// with out null only counted; returns the count.
   std::size_t merge_chunk(std::size_t q0, std::size_t q1, std::span<const std::int32_t> na,
                           std::span<const std::int32_t> nb, std::span<const std::int32_t> nlink,
                           std::size_t p0, std::size_t p1, std::span<const std::uint8_t> moving,
                           bool replace_all, Columns* out, std::size_t o) const;
-  std::size_t first_at_or_after(std::size_t q, std::int32_t i, std::int32_t j) const;
+  std::size_t first_at_or_after(std::size_t q, std::size_t end, std::int32_t i, std::int32_t j) const;
   void end_search();
   double _skin;
   std::size_t _builds = 0, _version = 0, _partial = 0;
