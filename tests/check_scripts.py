@@ -20,7 +20,12 @@
 - scripts/penetration.py's off_path: a history whose tip moves along an
   oblique path (30 degrees, aimed off the origin) plus a known drift across
   it, in both directions across and largest before the end, gives that
-  drift's final distance and its largest speed, to 1e-12.
+  drift's final distance and its largest speed, to 1e-12;
+- scripts/bar_packing.py: a bar along x and one huge sphere that fills the
+  half-space z < -c: in each band of distance d from the axis the solid
+  fraction is the mean of arccos(c / d) / pi over the band (points uniform
+  in the cross-section, so weighted by d), within 5 standard errors of the
+  points' count.
 Usage: check_scripts.py SOURCE_DIR"""
 import math
 import os
@@ -28,6 +33,7 @@ import sys
 
 sys.path.insert(0, os.path.join(sys.argv[1], "scripts"))
 import ballistic  # noqa: E402
+import bar_packing  # noqa: E402
 import numpy as np  # noqa: E402
 import penetration  # noqa: E402
 import resistance  # noqa: E402
@@ -94,6 +100,19 @@ with tempfile.TemporaryDirectory() as tmp:
 print(f"off_path of a synthetic history: {1e3 * off:.6f} mm off, {across:.6f} m/s across")
 if abs(off - 0.002) > 1e-12 or abs(across - 10.0) > 1e-12:
     problems.append(f"off_path: {off} m and {across} m/s instead of 0.002 m and 10 m/s")
+# bar_packing: the half-space z < -c filled by one huge sphere, a bar along x
+c, big = 0.002, 1e4
+rng = np.random.default_rng(3)
+pts = np.column_stack([rng.uniform(-0.05, 0.05, 40000), rng.uniform(-0.01, 0.01, (40000, 2))])
+dist = bar_packing.axis_distance(pts, np.array([[-1.0, 0.0, 0.0]]), np.array([[1.0, 0.0, 0.0]]))
+inside = bar_packing.solid(pts, np.array([[0.0, 0.0, -c - big]]), np.array([big]))
+for lo, hi, f, n in bar_packing.fractions(pts, inside, dist, np.array([0.0, 0.001, 0.003, 0.006, 0.01])):
+    d = np.linspace(max(lo, c), hi, 2001)[1:]
+    expected = np.trapz(d * np.arccos(np.minimum(c / d, 1.0)) / math.pi, d) / (0.5 * (hi * hi - lo * lo)) if hi > c else 0.0
+    err = 5.0 * math.sqrt(max(expected * (1 - expected), 1.0 / max(n, 1)) / max(n, 1))
+    print(f"bar_packing: {1e3 * lo:.0f}-{1e3 * hi:.0f} mm: {f:.4f} against {expected:.4f} ({n} points)")
+    if n < 100 or not abs(f - expected) <= err:
+        problems.append(f"bar_packing: band {lo}-{hi} m: {f} instead of {expected} (+-{err})")
 for q in problems:
     print(q)
 sys.exit(1 if problems else 0)

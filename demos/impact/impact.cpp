@@ -149,7 +149,11 @@ private:
       _pk = read_target_packing(region);
     else
     {
-      _pk = pack(region);
+      // with bars, the region less their cylinders is packed, so that the
+      // packing's relaxation fills up to the bars' surfaces (removing the
+      // spheres on the bars from a plain packing and lining the bars leaves
+      // a loose layer round them: validation.md 7b.2)
+      _pk = pack(_s.reinforcement.any() ? region_without_bars(region, _bars, largest_radius()) : region);
       if (_s.reinforcement.any())
         line_the_bars(region);
     }
@@ -230,9 +234,13 @@ private:
     }
   }
 
-  /// A generated packing around the bars: the spheres on them removed, and
-  /// the bars' surfaces lined with spheres tangent to them (fill_boundary),
-  /// so that no void is left beside a bar.
+  /// An upper bound of the generated packing's largest radius (the reach of
+  /// region_without_bars): a radius ratio's spheres lie within mean x ratio.
+  double largest_radius() const { return _s.target.mean_radius * std::max(1.0, _s.target.radius_ratio); }
+
+  /// After packing around the bars: the spheres still on them removed, and
+  /// the bars' surfaces left uncovered lined with spheres tangent to them
+  /// (fill_boundary), so that no void is left beside a bar.
   void line_the_bars(const Region& region)
   {
     const auto [removed, added] = make_room_for_bars(_pk, region, _bars);
