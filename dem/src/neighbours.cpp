@@ -7,6 +7,7 @@
 #include "threads.h"
 #include <cmath>
 #include <limits>
+#include <ranges>
 #include <stdexcept>
 #include <string>
 
@@ -478,16 +479,8 @@ void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std:
       continue;
     // the first new pair after the listed pair q[t] - 1
     const std::int32_t la = a[q[t] - 1], lb = b[q[t] - 1];
-    std::size_t lo = p[t], hi = na.size();
-    while (lo < hi)
-    {
-      const std::size_t mid = lo + (hi - lo) / 2;
-      if (na[mid] < la || (na[mid] == la && nb[mid] <= lb))
-        lo = mid + 1;
-      else
-        hi = mid;
-    }
-    p[t] = lo;
+    p[t] = *std::ranges::partition_point(std::views::iota(p[t], na.size()), [&](std::size_t k)
+                                         { return na[k] < la || (na[k] == la && nb[k] <= lb); });
   }
   // (one chunk: no count, the columns sized for the most it can give)
   if (nt > 1)
@@ -500,24 +493,12 @@ void NeighbourList::merge(std::span<const std::int32_t> na, std::span<const std:
   }
   const std::size_t total = nt > 1 ? o[nt] : (replace_all ? 0 : m) + na.size();
   Columns& out = _spare;
-  out.a.resize(total);
-  out.b.resize(total);
-  out.link.resize(total);
-  out.fs.resize(3 * total);
-  out.mr.resize(_rolling ? 3 * total : 0);
-  out.n.resize(3 * total);
-  out.touching.resize(total);
+  out.resize(total, _rolling);
   std::size_t written = 0;
 #pragma omp parallel for schedule(static) num_threads(nt) reduction(+ : written)
   for (int t = 0; t < nt; ++t)
     written += merge_chunk(q[t], q[t + 1], na, nb, nlink, p[t], p[t + 1], moving, replace_all, &out, o[t]);
-  out.a.resize(written);
-  out.b.resize(written);
-  out.link.resize(written);
-  out.fs.resize(3 * written);
-  out.mr.resize(_rolling ? 3 * written : 0);
-  out.n.resize(3 * written);
-  out.touching.resize(written);
+  out.resize(written, _rolling);
   a.swap(out.a);
   b.swap(out.b);
   link.swap(out.link);

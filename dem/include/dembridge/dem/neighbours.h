@@ -200,6 +200,17 @@ private:
     std::vector<std::int32_t> a, b, link;
     std::vector<double> fs, mr, n;
     std::vector<std::uint8_t> touching;
+    /// m pairs (mr only with rolling moments); growth zero-filled, the rest kept
+    void resize(std::size_t m, bool rolling)
+    {
+      a.resize(m);
+      b.resize(m);
+      link.resize(m);
+      fs.resize(3 * m);
+      mr.resize(rolling ? 3 * m : 0);
+      n.resize(3 * m);
+      touching.resize(m);
+    }
   };
   void copy_pairs(std::size_t q0, std::size_t q1, Columns& out, std::size_t o) const;
   /// One chunk of a merge (neighbours.cpp): the listed pairs [q0, q1) and the
