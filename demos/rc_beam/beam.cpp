@@ -140,13 +140,19 @@ private:
     po.mean_radius = _c.mean_radius;
     po.radius_ratio = _c.radius_ratio;
     po.seed = _c.seed;
-    Packing pk = generate_packing(region, po);
-    double solid = 0.0; // the packing fraction, the bars' room not made yet
+    // the beam less the bars' cylinders is packed, so that the packing's
+    // relaxation fills up to the bars' surfaces (docs/method.md 1.15); the
+    // few spheres left on a bar are replaced by spheres tangent to it
+    const double rmax = _c.mean_radius * std::max(1.0, _c.radius_ratio); // a bound of the packing's largest
+    Packing pk = generate_packing(region_without_bars(region, _bars, rmax), po);
+    make_room_for_bars(pk, region, _bars);
+    double solid = 0.0, bars_volume = 0.0; // the packing fraction, over the concrete's volume
     for (double r : pk.r)
       solid += 4.0 / 3.0 * pi * r * r * r;
-    make_room_for_bars(pk, region, _bars);
+    for (std::size_t e = 0; e < _bars.elements(); ++e)
+      bars_volume += _bars.area[e] * _bars.l0[e];
     _rmax = *std::max_element(pk.r.begin(), pk.r.end());
-    _p = make_particles(pk.x, pk.r, _c.material.density, solid / region.volume);
+    _p = make_particles(pk.x, pk.r, _c.material.density, solid / (region.volume - bars_volume));
     _links = create_links(_p, lambda_for_bulk_links(region, _p.x, _p.r, _c.links_per_sphere), _c.material);
     if (_c.skin_compensation)
       // the faces' skin, two Rmax deep, stiffened to the bulk's links per
@@ -415,7 +421,6 @@ private:
     _yield_forces["moment_ratio"] = maybe(inside, _yield_forces["internal_moment_n_m"].get<double>() / m_ext);
     _yield_forces["left_support_n"] = left;
     _yield_forces["right_support_n"] = right;
-    _yield_forces["supports_over_load"] = maybe(load > 0.0, (left + right) / load);
     if (!_c.output_dir.empty())
       write_bars_at_yield(std::filesystem::path(_c.output_dir) / "bars_first_yield.csv");
   }
@@ -478,6 +483,7 @@ private:
         _times.push_back(_solver->time());
         _delta.push_back(deflection());
         _load.push_back(mean_load);
+        _supports.push_back((left_sum + right_sum) / static_cast<double>(load_steps));
         if (_strip_joined && _cut_sample < 0)
           if (const auto [cut, x] = cover_cut(); cut)
           {
@@ -529,15 +535,40 @@ private:
   double yield_load_fitted() const
   {
     const std::size_t k = _yield_sample;
-    // the samples after the cover's cut, if it came before first yield
-    const std::size_t first = _cut_sample >= 0 && static_cast<std::size_t>(_cut_sample) < k ? _cut_sample + 1 : 0;
     LineFit fit; // deflections counted from first yield's (conditioning)
-    for (std::size_t j = first; j < _load.size(); ++j)
-      if (std::abs(_times[j] - _times[k]) <= 0.5 * _period)
-        fit.add(_delta[j] - _delta[k], _load[j]);
+    for (std::size_t j : yield_window())
+      fit.add(_delta[j] - _delta[k], _load[j]);
     if (fit.n < 3 || !(fit.det() > 1e-12 * fit.n * fit.sxx))
       return _load[k];
     return fit.intercept(); // at first yield's deflection
+  }
+
+  /// The samples within half a period of the first bending mode of first
+  /// yield, those up to the cover's cut left out if it came before.
+  std::vector<std::size_t> yield_window() const
+  {
+    const std::size_t k = _yield_sample;
+    const std::size_t first = _cut_sample >= 0 && static_cast<std::size_t>(_cut_sample) < k ? _cut_sample + 1 : 0;
+    std::vector<std::size_t> window;
+    for (std::size_t j = first; j < _load.size(); ++j)
+      if (std::abs(_times[j] - _times[k]) <= 0.5 * _period)
+        window.push_back(j);
+    return window;
+  }
+
+  /// The supports' reactions over the load, both summed over the first
+  /// yield's window: at any one sample they differ by the beam's inertia
+  /// force (its vibration once cracked), whose mean over a period of that
+  /// vibration is small; quasi-static equilibrium makes the ratio 1.
+  nlohmann::json supports_over_load() const
+  {
+    double supports = 0.0, load = 0.0;
+    for (std::size_t j : yield_window())
+    {
+      supports += _supports[j];
+      load += _load[j];
+    }
+    return load > 0.0 ? nlohmann::json(supports / load) : nlohmann::json(nullptr);
   }
 
   void report()
@@ -596,6 +627,8 @@ private:
     const double p_yield_there = inside ? 2.0 * _t.m_yield / (_c.span / 2.0 - std::abs(_x_yield_model)) : 0.0;
     _out["yield_section_x_m"] = value(_x_yield_model, yielded);
     _out["yield_load_at_section_theory_n"] = value(p_yield_there, inside);
+    if (yielded)
+      _yield_forces["supports_over_load"] = supports_over_load();
     _out["yield_section_forces"] = _yield_forces;
     _out["relative_error"] = {{"initial_stiffness", rel(k0, k0_theory, k0 > 0.0)},
                               {"cracking_load", rel(p_cr, _t.p_cracking, cracked)},
@@ -628,6 +661,7 @@ private:
   std::vector<std::int32_t> _left, _right, _plate, _gauge;
   std::unique_ptr<DemSolver> _solver;
   std::vector<double> _delta, _load, _times;
+  std::vector<double> _supports; ///< the supports' upward reactions, summed, at each sample
   std::size_t _yield_sample = 0; ///< the sample at first yield (with _p_yield_model > 0)
   double _period = 0.0;          ///< the first bending mode's period [s]
   // the cover's strip (cover_strip) and the sample where a crack first cut it
