@@ -347,6 +347,37 @@ std::array<std::size_t, 2> make_room_for_bars(Packing& packing, const Region& re
   return {removed, added};
 }
 
+ConcretePacking pack_around_bars(const Region& region, const Bars& bars, const PackingOptions& options)
+{
+  if (!(options.mean_radius > 0.0))
+    refuse("pack_around_bars: mean radius", options.mean_radius, "> 0 m (the packing is sized by it, not by a count)");
+  // a bound of the packing's largest radius: the reach of region_without_bars
+  const double rmax = options.mean_radius * std::max(1.0, options.radius_ratio);
+  ConcretePacking c;
+  c.packing = generate_packing(region_without_bars(region, bars, rmax), options);
+  const auto room = make_room_for_bars(c.packing, region, bars);
+  c.removed = room[0];
+  c.added = room[1];
+  c.solid_fraction = concrete_fraction(c.packing, region, bars);
+  return c;
+}
+
+double concrete_fraction(const Packing& packing, const Region& region, const Bars& bars)
+{
+  double solid = 0.0, bars_volume = 0.0;
+  for (double r : packing.r)
+    solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  for (std::size_t e = 0; e < bars.elements(); ++e)
+  {
+    const double* a = &bars.x[3 * bars.a[e]];
+    const double* b = &bars.x[3 * bars.b[e]];
+    const Point mid{0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+    if (region.sdf(mid) < 0.0)
+      bars_volume += bars.area[e] * bars.l0[e];
+  }
+  return solid / (region.volume - bars_volume);
+}
+
 std::size_t create_bonds(Bars& bars, const Particles& p, double reach)
 {
   if (!(reach >= 0.0) || !std::isfinite(reach))

@@ -148,35 +148,14 @@ private:
     if (!t.packing_file.empty())
       _pk = read_target_packing(region);
     else
-    {
-      // with bars, the region less their cylinders is packed, so that the
-      // packing's relaxation fills up to the bars' surfaces (removing the
-      // spheres on the bars from a plain packing and lining the bars leaves
-      // a loose layer round them: validation.md 7b.2)
-      _pk = pack(_s.reinforcement.any() ? region_without_bars(region, _bars, largest_radius()) : region);
-      if (_s.reinforcement.any())
-        line_the_bars(region);
-    }
+      _pk = pack(region);
     if (_pk.size() == 0)
       throw std::runtime_error("target: no sphere in the slab (target.mean_radius_m " + fmt(t.mean_radius)
                                + " m against its size): use smaller spheres");
-    double solid = 0.0;
-    for (double r : _pk.r)
-      solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-    // (the concrete's volume: the slab's less the bars' inside it)
-    double bars_volume = 0.0;
-    for (std::size_t e = 0; e < _bars.elements(); ++e)
-    {
-      const double* a = &_bars.x[3 * _bars.a[e]];
-      const double* b = &_bars.x[3 * _bars.b[e]];
-      const V3 mid{0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
-      if (region.sdf(mid) < 0.0)
-        bars_volume += _bars.area[e] * _bars.l0[e];
-    }
-    _fraction = solid / (region.volume - bars_volume);
+    _fraction = concrete_fraction(_pk, region, _bars); // over the slab's volume less the bars'
     const Material& mat = _s.material.material;
     // a packing file's spheres that overlap a bar are left out (a generated
-    // packing was made around the bars: line_the_bars)
+    // packing was made around the bars: pack_around_bars)
     std::vector<double> x = _pk.x, r = _pk.r;
     if (_s.reinforcement.any() && !t.packing_file.empty())
       clear_bars(x, r);
@@ -198,7 +177,10 @@ private:
   }
 
   /// The slab's packing, graded along the projectile's path if the
-  /// scenario asks for finer spheres there (fine_scale).
+  /// scenario asks for finer spheres there (fine_scale); with bars, packed
+  /// round them (pack_around_bars), so that no void is left beside a bar
+  /// (removing the spheres on the bars from a plain packing and lining the
+  /// bars leaves a loose layer round them: validation.md 7b.2).
   Packing pack(const Region& region) const
   {
     const TargetSpec& t = _s.target;
@@ -215,7 +197,13 @@ private:
         std::cout << ", " << t.fine_mean() << " m within " << t.fine_radius << " m of the path";
       std::cout << ")..." << std::endl;
     }
-    return generate_packing(region, po);
+    if (!_s.reinforcement.any())
+      return generate_packing(region, po);
+    ConcretePacking c = pack_around_bars(region, _bars, po);
+    if (!_cfg.quiet)
+      std::cout << "the bars' room: " << c.removed << " spheres removed, " << c.added << " added against the bars"
+                << std::endl;
+    return std::move(c.packing);
   }
 
   /// The bars of the scenario (make_bars), their elements at most
@@ -232,21 +220,6 @@ private:
     {
       throw std::runtime_error(std::string("reinforcement: ") + e.what());
     }
-  }
-
-  /// An upper bound of the generated packing's largest radius (the reach of
-  /// region_without_bars): a radius ratio's spheres lie within mean x ratio.
-  double largest_radius() const { return _s.target.mean_radius * std::max(1.0, _s.target.radius_ratio); }
-
-  /// After packing around the bars: the spheres still on them removed, and
-  /// the bars' surfaces left uncovered lined with spheres tangent to them
-  /// (fill_boundary), so that no void is left beside a bar.
-  void line_the_bars(const Region& region)
-  {
-    const auto [removed, added] = make_room_for_bars(_pk, region, _bars);
-    if (!_cfg.quiet)
-      std::cout << "the bars' room: " << removed << " spheres removed, " << added << " added against the bars"
-                << std::endl;
   }
 
   /// Leaves out the spheres (x, r) that overlap a bar by more than the

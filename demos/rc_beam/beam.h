@@ -10,6 +10,9 @@
 #include "dembridge/dem/bars.h"
 
 #include <nlohmann/json.hpp>
+
+#include <array>
+#include <span>
 #include <string>
 
 namespace dembridge::demo
@@ -72,6 +75,14 @@ struct BeamTheory
   double deflection(const BeamConfig& c, double load, bool tension_stiffening = false) const; ///< [m]
 };
 BeamTheory beam_theory(const BeamConfig& c);
+
+/// The change of slope of a curve y(x) that starts at the origin (a load
+/// against a deflection): the breakpoint xb of the continuous two-line
+/// least-squares fit y = a min(x, xb) + b max(x - xb, 0) over the points
+/// with 0 < x <= x_end, xb searched over 5-90 % of x_end in steps of 0.25 %.
+/// Returns {xb, a xb}; {0, 0} with fewer than 4 such points or where every
+/// breakpoint leaves the fit singular.
+std::array<double, 2> change_of_slope(std::span<const double> x, std::span<const double> y, double x_end);
 
 /// Runs the beam; returns the summary (docs/demos.md, rc_beam).
 nlohmann::json run_beam(const BeamConfig& c);

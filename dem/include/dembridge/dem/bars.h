@@ -171,6 +171,27 @@ Region region_without_bars(const Region& region, const Bars& bars, double rmax);
 /// the packing's range). Returns {removed, added}.
 std::array<std::size_t, 2> make_room_for_bars(Packing& packing, const Region& region, const Bars& bars);
 
+/// A packing of the concrete round the bars and its solid fraction.
+struct ConcretePacking
+{
+  Packing packing;
+  std::size_t removed = 0;   ///< spheres left on a bar, removed (make_room_for_bars)
+  std::size_t added = 0;     ///< spheres added tangent to the bars
+  double solid_fraction = 0; ///< the spheres' volume over the concrete's: the region's less the bars' inside it
+};
+
+/// Packs `region` round the bars (docs/method.md 1.15): generate_packing on
+/// the region less the bars' cylinders, so that the packing's relaxation
+/// fills up to the bars' surfaces, then make_room_for_bars for the few
+/// spheres left on a bar. The solid fraction is taken over the concrete's
+/// volume (concrete_fraction). options.mean_radius must be > 0 (it bounds
+/// the largest radius, the reach of region_without_bars).
+ConcretePacking pack_around_bars(const Region& region, const Bars& bars, const PackingOptions& options);
+
+/// The spheres' volume over the concrete's: the region's volume less the
+/// bars' elements whose midpoint lies inside it (area x length).
+double concrete_fraction(const Packing& packing, const Region& region, const Bars& bars);
+
 /// Bonds every sphere whose surface lies within `reach` of a bar's surface
 /// (centre closer to the axis than radius + bar radius + reach) to the
 /// nearest point of the nearest element. Each element's surface pi d l0 is
