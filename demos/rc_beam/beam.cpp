@@ -156,6 +156,8 @@ public:
     set_up();
     loop();
     report();
+    if (!_c.output_dir.empty())
+      write_theory_curve(std::filesystem::path(_c.output_dir) / "theory_curve.csv");
     return _out;
   }
 
@@ -658,6 +660,22 @@ private:
       d.push_back(_t.deflection(_c, p.back()));
     }
     return change_of_slope(d, p, d.back())[1];
+  }
+
+  /// The section theory's load against its deflection, smeared and with
+  /// tension stiffening, from 0 to first yield (200 steps of load), for the
+  /// plot beside the run's curve.
+  void write_theory_curve(const std::filesystem::path& file) const
+  {
+    std::ofstream out(file);
+    out << "load_n,deflection_m,deflection_tension_stiffening_m\n" << std::setprecision(10);
+    for (int i = 0; i <= 200; ++i)
+    {
+      const double p = _t.p_yield * i / 200.0;
+      out << p << "," << _t.deflection(_c, p) << "," << _t.deflection(_c, p, true) << "\n";
+    }
+    if (!out)
+      throw std::runtime_error("cannot write " + file.string());
   }
 
   void report()

@@ -8,14 +8,17 @@
 //   build/bin/rc_beam --output out/rc_beam --summary out/rc_beam.json
 //   build/bin/rc_beam --bars 3 --bar-diameter 0.005 --mean-radius 0.004
 // Output: DIR/particles.xdmf (the spheres and the cracks), DIR/bars.xdmf
-// (axial force, plastic strain, slip), DIR/load_deflection.csv.
+// (axial force, plastic strain, slip), DIR/load_deflection.csv,
+// DIR/theory_curve.csv, DIR/summary.json and DIR/load_deflection.png.
 #include "beam.h"
 #include "options.h"
 #include "support.h"
 #include "dembridge/dem/material_file.h"
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <iostream>
+#include <vector>
 
 int main(int argc, char** argv)
 {
@@ -99,6 +102,9 @@ int main(int argc, char** argv)
   demo::add_integer(app, "--frames", c.frames, "XDMF frames", Allowed::closed(1, 100000));
   demo::add_output_dir(app, "--output", c.output_dir, "output folder (XDMF, CSV); empty = none");
   demo::add_output_file(app, "--summary", summary, "write key results as JSON to this file");
+  int plot = 1;
+  demo::add_integer(app, "--plot", plot, "1: write DIR/load_deflection.png with matplotlib, 0: no",
+                    Allowed::closed(0, 1));
   if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
     return rc;
   return demo::run_guarded(argc, argv, [&]
@@ -108,5 +114,20 @@ int main(int argc, char** argv)
     std::cout << r.dump(2) << std::endl;
     if (!summary.empty())
       demo::write_summary(summary, r);
+    if (c.output_dir.empty())
+      return;
+    const std::filesystem::path dir = c.output_dir;
+    demo::write_summary(dir / "summary.json", r);
+    if (plot == 1)
+    {
+      const std::vector<std::string> cmd{"/usr/bin/python3",
+                                         demo::shipped_file("scripts/plot_rc_beam.py",
+                                                            DEMBRIDGE_SOURCE_DIR "/scripts/plot_rc_beam.py"),
+                                         c.output_dir};
+      if (demo::run_program(cmd) != 0)
+        std::cerr << "warning: the plot was not made (scripts/plot_rc_beam.py failed); load_deflection.csv is written\n";
+      else
+        std::cout << "plot: " << (dir / "load_deflection.png").string() << "\n";
+    }
   }, summary);
 }
