@@ -590,15 +590,19 @@ private:
     std::vector<double> s(_load.size());
     for (std::size_t j = 0; j < _load.size(); ++j)
     {
-      double sum = 0.0;
-      int n = 0;
-      for (std::size_t i = j; i < _load.size() && _times[i] - _times[j] <= 0.25 * _period; ++i, ++n)
-        sum += _load[i];
-      for (std::size_t i = j; i-- > 0 && _times[j] - _times[i] <= 0.25 * _period; ++n)
-        sum += _load[i];
-      s[j] = sum / n;
+      const auto [lo, hi] = samples_within(j, 0.25 * _period);
+      s[j] = std::accumulate(_load.begin() + lo, _load.begin() + hi, 0.0) / static_cast<double>(hi - lo);
     }
     return s;
+  }
+
+  /// The samples within `half` [s] of sample k's time: [first, end) (the
+  /// samples' times increase).
+  std::array<std::size_t, 2> samples_within(std::size_t k, double half) const
+  {
+    const auto lo = std::lower_bound(_times.begin(), _times.end(), _times[k] - half);
+    const auto hi = std::upper_bound(_times.begin(), _times.end(), _times[k] + half);
+    return {static_cast<std::size_t>(lo - _times.begin()), static_cast<std::size_t>(hi - _times.begin())};
   }
 
   /// The load at first yield, read on a straight line fitted (least
@@ -625,10 +629,10 @@ private:
   {
     const std::size_t k = _yield_sample;
     const std::size_t first = _cut_sample >= 0 && static_cast<std::size_t>(_cut_sample) < k ? _cut_sample + 1 : 0;
+    const auto [lo, hi] = samples_within(k, 0.5 * _period);
     std::vector<std::size_t> window;
-    for (std::size_t j = first; j < _load.size(); ++j)
-      if (std::abs(_times[j] - _times[k]) <= 0.5 * _period)
-        window.push_back(j);
+    for (std::size_t j = std::max(lo, first); j < hi; ++j)
+      window.push_back(j);
     return window;
   }
 
@@ -653,27 +657,32 @@ private:
   /// (null in the summary where the theory's bars yield before it cracks)
   double theory_change_of_slope() const
   {
-    std::vector<double> d, p;
-    for (int i = 1; i <= 400; ++i)
-    {
-      p.push_back(_t.p_yield * i / 400.0);
-      d.push_back(_t.deflection(_c, p.back()));
-    }
+    const auto [p, d, d_ts] = theory_curve();
     return change_of_slope(d, p, d.back())[1];
   }
 
-  /// The section theory's load against its deflection, smeared and with
-  /// tension stiffening, from 0 to first yield (200 steps of load), for the
-  /// plot beside the run's curve.
+  /// The section theory's loads from 0 to first yield (400 steps) and its
+  /// deflections under them, smeared and with tension stiffening.
+  std::array<std::vector<double>, 3> theory_curve() const
+  {
+    std::array<std::vector<double>, 3> c;
+    for (int i = 0; i <= 400; ++i)
+    {
+      c[0].push_back(_t.p_yield * i / 400.0);
+      c[1].push_back(_t.deflection(_c, c[0].back()));
+      c[2].push_back(_t.deflection(_c, c[0].back(), true));
+    }
+    return c;
+  }
+
+  /// theory_curve, for the plot beside the run's curve.
   void write_theory_curve(const std::filesystem::path& file) const
   {
+    const auto [p, d, d_ts] = theory_curve();
     std::ofstream out(file);
     out << "load_n,deflection_m,deflection_tension_stiffening_m\n" << std::setprecision(10);
-    for (int i = 0; i <= 200; ++i)
-    {
-      const double p = _t.p_yield * i / 200.0;
-      out << p << "," << _t.deflection(_c, p) << "," << _t.deflection(_c, p, true) << "\n";
-    }
+    for (std::size_t i = 0; i < p.size(); ++i)
+      out << p[i] << "," << d[i] << "," << d_ts[i] << "\n";
     if (!out)
       throw std::runtime_error("cannot write " + file.string());
   }
