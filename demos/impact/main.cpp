@@ -41,7 +41,7 @@ int main(int argc, char** argv)
   int plot = 1;
   CLI::App app{"A rigid projectile striking a slab of DE concrete", "impact"};
   app.add_option("scenario", scenario,
-                 "scenario file (TOML), or the name of a shipped one: small, hanchak-48, semi-infinite");
+                 "scenario file (TOML), or the name of a shipped one: small, small-rc, hanchak-48, semi-infinite");
   app.add_option("--set", sets, "override a scenario key: section.key=value (TOML value), e.g. "
                                 "projectile.velocity_m_s=600; repeatable");
   app.add_flag("--keys", keys, "print every scenario key with its unit, default and allowed values, and exit");
@@ -59,7 +59,7 @@ int main(int argc, char** argv)
   }
   if (scenario.empty())
   {
-    std::cerr << "error: scenario: give a scenario file or a shipped scenario's name (small, hanchak-48, "
+    std::cerr << "error: scenario: give a scenario file or a shipped scenario's name (small, small-rc, hanchak-48, "
                  "semi-infinite); --keys lists the keys" << std::endl;
     return 2;
   }
