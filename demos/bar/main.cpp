@@ -107,9 +107,7 @@ int main(int argc, char** argv)
     const std::filesystem::path root = c.output.empty() ? std::filesystem::path("out/bar_compare") : std::filesystem::path(c.output);
     auto plot = [&](const std::filesystem::path& dir)
     {
-      const std::vector<std::string> cmd{python, demo::shipped_file("scripts/plot_bar.py", DEMBRIDGE_SOURCE_DIR "/scripts/plot_bar.py"), dir.string()};
-      if (demo::run_program(cmd) != 0)
-        std::cerr << "warning: the plots were not made (" << python << " scripts/plot_bar.py failed); the table and CSV files are written\n";
+      demo::run_plot_script("plot_bar.py", dir.string(), "the table and CSV files are", python);
     };
     if (seeds == 1)
     {

@@ -113,10 +113,7 @@ int main(int argc, char** argv)
       demo::write_json(std::filesystem::path(output) / "history.json", r.history);
       std::cout << "parameter file: " << (std::filesystem::path(output) / "material.json") << std::endl;
       if (plot == "1")
-      {
-        if (demo::run_program({"/usr/bin/python3", demo::shipped_file("scripts/plot_stress_strain.py", DEMBRIDGE_SOURCE_DIR "/scripts/plot_stress_strain.py"), output}) != 0)
-          std::cerr << "warning: the plots could not be made (python3-matplotlib missing?)\n";
-      }
+        demo::run_plot_script("plot_stress_strain.py", output, "material.json and history.json are");
     }
     if (!summary.empty())
       demo::write_summary(summary, out);

@@ -196,6 +196,17 @@ std::string shipped_file(const std::string& installed, const std::string& source
   return source;
 }
 
+bool run_plot_script(const std::string& script, const std::string& dir, const std::string& kept,
+                     const std::string& python)
+{
+  const std::string path = shipped_file("scripts/" + script, DEMBRIDGE_SOURCE_DIR "/scripts/" + script);
+  if (run_program({python, path, dir}) == 0)
+    return true;
+  std::cerr << "warning: the plot was not made (" << python << " scripts/" << script << " failed); " << kept
+            << " written\n";
+  return false;
+}
+
 int run_program(const std::vector<std::string>& args)
 {
   if (args.empty())

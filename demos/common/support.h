@@ -89,6 +89,13 @@ std::string shipped_file(const std::string& installed, const std::string& source
 /// not be started or did not exit normally.
 int run_program(const std::vector<std::string>& args);
 
+/// Runs the shipped plot script scripts/`script` (shipped_file) on the
+/// folder `dir` with `python`, and waits for it. On failure it warns on
+/// stderr that the plot was not made and that `kept` (the data) are written;
+/// a plot is never worth failing the run for. Returns true if it succeeded.
+bool run_plot_script(const std::string& script, const std::string& dir, const std::string& kept,
+                     const std::string& python = "/usr/bin/python3");
+
 /// Resident memory high-water mark of this process [bytes] (Linux).
 long peak_rss_bytes();
 

@@ -92,12 +92,7 @@ int main(int argc, char** argv)
       demo::write_summary(summary, r);
     if (c.plot && !c.output_dir.empty())
     {
-      const std::vector<std::string> cmd{"/usr/bin/python3",
-                                         demo::shipped_file("scripts/plot_impact.py", DEMBRIDGE_SOURCE_DIR "/scripts/plot_impact.py"),
-                                         c.output_dir};
-      if (demo::run_program(cmd) != 0)
-        std::cerr << "warning: the plot was not made (scripts/plot_impact.py failed); history.csv is written\n";
-      else
+      if (demo::run_plot_script("plot_impact.py", c.output_dir, "history.csv is"))
         std::cout << "plot: " << (std::filesystem::path(c.output_dir) / "history.png").string() << "\n";
     }
   }, summary);

@@ -18,7 +18,6 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <iostream>
-#include <vector>
 
 int main(int argc, char** argv)
 {
@@ -120,13 +119,7 @@ int main(int argc, char** argv)
     demo::write_summary(dir / "summary.json", r);
     if (plot == 1)
     {
-      const std::vector<std::string> cmd{"/usr/bin/python3",
-                                         demo::shipped_file("scripts/plot_rc_beam.py",
-                                                            DEMBRIDGE_SOURCE_DIR "/scripts/plot_rc_beam.py"),
-                                         c.output_dir};
-      if (demo::run_program(cmd) != 0)
-        std::cerr << "warning: the plot was not made (scripts/plot_rc_beam.py failed); load_deflection.csv is written\n";
-      else
+      if (demo::run_plot_script("plot_rc_beam.py", c.output_dir, "load_deflection.csv is"))
         std::cout << "plot: " << (dir / "load_deflection.png").string() << "\n";
     }
   }, summary);
