@@ -30,6 +30,24 @@ inline std::int32_t b_ahead(std::span<const std::int32_t> b, std::int32_t k)
 {
   return b[std::min<std::size_t>(static_cast<std::size_t>(k + ahead), b.size() - 1)];
 }
+/// The `count` items' prepared values g[0..3] from the branch (d, |d|^2) to
+/// the unit normal and the length (d / |d|, |d|); items marked with g[3] < 0
+/// are left as they are.
+inline void unit_normals(double* g, std::int32_t count)
+{
+  for (std::int32_t m = 0; m < count; ++m)
+  {
+    double* gk = g + prepared * m;
+    if (gk[3] < 0.0)
+      continue;
+    const double D = std::sqrt(gk[3]);
+    const double inv = 1.0 / D;
+    gk[0] *= inv;
+    gk[1] *= inv;
+    gk[2] *= inv;
+    gk[3] = D;
+  }
+}
 /// Unit normal a -> b and branch length of the items [k0, k1) of sphere i,
 /// into g[0..3] of each item's `prepared` values: done for a sphere's items
 /// together, so that the square roots and divisions of successive items
@@ -48,16 +66,7 @@ inline void branches(const double* rec, std::size_t i, std::span<const std::int3
     gk[2] = xj[2] - xi[2];
     gk[3] = gk[0] * gk[0] + gk[1] * gk[1] + gk[2] * gk[2];
   }
-  for (std::int32_t m = 0; m < k1 - k0; ++m)
-  {
-    double* gk = g + prepared * m;
-    const double D = std::sqrt(gk[3]);
-    const double inv = 1.0 / D;
-    gk[0] *= inv;
-    gk[1] *= inv;
-    gk[2] *= inv;
-    gk[3] = D;
-  }
+  unit_normals(g, k1 - k0);
 }
 
 /// One sweep over the items of `ix` by the calling thread (call from every
@@ -267,6 +276,24 @@ void sphere_gate_sums(const Particles& p, const Links& l, const Material& mat, i
     for (std::size_t i = 0; i < p.size(); ++i)
       s.pressure[i] *= -mat.density / (6.0 * p.m[i]);
 }
+/// The most a pair's touching distance exceeds R_a + R_b [m]: that of a
+/// broken link whose crack closes (impl::closing_distance, Material::
+/// crack_closure), zero without closure (the compaction's set only lowers
+/// it: law.h).
+double contact_reach(const Particles& p, const Links& l, const Material& mat)
+{
+  if (!(mat.crack_closure > 0.0))
+    return 0.0;
+  double reach = 0.0;
+  const auto nl = static_cast<std::int64_t>(l.size());
+#pragma omp parallel for schedule(static) reduction(max : reach) num_threads(impl::threads_for(l.size()))
+  for (std::int64_t k = 0; k < nl; ++k)
+  {
+    const double rs = p.r[l.a[k]] + p.r[l.b[k]];
+    reach = std::max(reach, impl::closing_distance(l.d0[k], rs, mat.crack_closure) - rs);
+  }
+  return reach;
+}
 } // namespace
 
 void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
@@ -288,6 +315,12 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     s.links_for = l.a.data();
     s.links_size = l.size();
     s.pairs_version = SIZE_MAX;
+    s.closure_for = -1.0;
+  }
+  if (s.closure_for != mat.crack_closure)
+  {
+    s.contact_reach = contact_reach(p, l, mat);
+    s.closure_for = mat.crack_closure;
   }
   // the records, 64-byte aligned (one cache line each)
   s.records.resize(record * np + record);
@@ -588,6 +621,11 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   {
     constexpr int W = decltype(width)::value;
     s.pair_slip[q] = 0.0;
+    if (n[3] < 0.0) // apart, and was (contact_prepare)
+    {
+      std::fill(out, out + W, 0.0);
+      return false;
+    }
     const std::int32_t j = nl.b[q];
     const double D = n[3];
     const double rs = rad[i] + rad[j];
@@ -660,8 +698,29 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
     }
     return true;
   };
+  // a pair that was apart at the last step and is farther apart now than
+  // any pair can touch (R_a + R_b + the broken links' closing reach, with a
+  // margin over the rounding) stays apart: it is marked (D = -1) and skipped,
+  // its shear and rolling springs at zero as they were (a pair apart holds
+  // no history); most listed pairs are such, in a perforation
+  const double reach_margin = 1.0 + 1e-9;
   auto contact_prepare = [&](std::size_t i, std::int32_t k0, std::int32_t k1, double* g)
-  { branches(rec, i, nl.b, k0, k1, g); };
+  {
+    const double* xi = rec + record * i;
+    for (std::int32_t k = k0; k < k1; ++k)
+    {
+      __builtin_prefetch(rec + record * b_ahead(nl.b, k));
+      const double* xj = rec + record * nl.b[k];
+      double* gk = g + prepared * (k - k0);
+      gk[0] = xj[0] - xi[0];
+      gk[1] = xj[1] - xi[1];
+      gk[2] = xj[2] - xi[2];
+      const double d2 = gk[0] * gk[0] + gk[1] * gk[1] + gk[2] * gk[2];
+      const double far = (xi[3] + xj[3] + s.contact_reach) * reach_margin;
+      gk[3] = !nl.touching[k] && d2 > far * far ? -1.0 : d2;
+    }
+    unit_normals(g, k1 - k0);
+  };
 
 #pragma omp parallel num_threads(nt)
   {

@@ -24,9 +24,9 @@ constexpr int prepared = 8;
 constexpr int record = 8;
 
 /// How the items of the force loop (links, or neighbour pairs; sorted by
-/// (a, b)) are shared between T threads: thread t owns the spheres
-/// [n t / T, n (t + 1) / T) and computes the items whose a it owns, adding
-/// each item's force to both spheres. Items whose b belongs to a later
+/// (a, b)) are shared between T threads: thread t owns a contiguous range
+/// of spheres, with an equal share of items plus spheres, and computes the
+/// items whose a it owns, adding each item's force to both spheres. Items whose b belongs to a later
 /// thread ("cross" items) are computed first into a buffer, which their b
 /// sphere reads before its own items: every sphere then sums its items in the
 /// same order (b side in item order, then a side) whatever T is.
@@ -41,6 +41,7 @@ struct SweepIndex
   /// on b (3), torque factor q (3) or q_a (3) and q_b (3)
   std::vector<double> out;
   std::vector<std::vector<double>> geometry; ///< per thread: branches of one sphere's items
+  std::vector<std::int64_t> upto; ///< build()'s scratch: the items of the spheres before i, plus i
   int threads = 0;
   /// @throws std::runtime_error if the items are not sorted or out of range
   void build(std::size_t np, std::span<const std::int32_t> a, std::span<const std::int32_t> b,
@@ -70,6 +71,9 @@ struct ForceScratch
   std::vector<double> pressure;
   const std::int32_t* links_for = nullptr; ///< the link array the index was built for
   std::size_t links_size = 0, pairs_version = SIZE_MAX;
+  /// the most a pair's touching distance exceeds R_a + R_b [m], for the
+  /// links and the crack closure `closure_for` (-1: not yet known)
+  double contact_reach = 0.0, closure_for = -1.0;
   std::size_t bytes() const;
 };
 
