@@ -276,24 +276,6 @@ void sphere_gate_sums(const Particles& p, const Links& l, const Material& mat, i
     for (std::size_t i = 0; i < p.size(); ++i)
       s.pressure[i] *= -mat.density / (6.0 * p.m[i]);
 }
-/// The most a pair's touching distance exceeds R_a + R_b [m]: that of a
-/// broken link whose crack closes (impl::closing_distance, Material::
-/// crack_closure), zero without closure (the compaction's set only lowers
-/// it: law.h).
-double contact_reach(const Particles& p, const Links& l, const Material& mat)
-{
-  if (!(mat.crack_closure > 0.0))
-    return 0.0;
-  double reach = 0.0;
-  const auto nl = static_cast<std::int64_t>(l.size());
-#pragma omp parallel for schedule(static) reduction(max : reach) num_threads(impl::threads_for(l.size()))
-  for (std::int64_t k = 0; k < nl; ++k)
-  {
-    const double rs = p.r[l.a[k]] + p.r[l.b[k]];
-    reach = std::max(reach, impl::closing_distance(l.d0[k], rs, mat.crack_closure) - rs);
-  }
-  return reach;
-}
 } // namespace
 
 void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
@@ -319,7 +301,7 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   }
   if (s.closure_for != mat.crack_closure)
   {
-    s.contact_reach = contact_reach(p, l, mat);
+    s.contact_reach = impl::closing_reach(p.r, l, mat.crack_closure);
     s.closure_for = mat.crack_closure;
   }
   // the records, 64-byte aligned (one cache line each)

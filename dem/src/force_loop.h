@@ -26,10 +26,11 @@ constexpr int record = 8;
 /// How the items of the force loop (links, or neighbour pairs; sorted by
 /// (a, b)) are shared between T threads: thread t owns a contiguous range
 /// of spheres, with an equal share of items plus spheres, and computes the
-/// items whose a it owns, adding each item's force to both spheres. Items whose b belongs to a later
-/// thread ("cross" items) are computed first into a buffer, which their b
-/// sphere reads before its own items: every sphere then sums its items in the
-/// same order (b side in item order, then a side) whatever T is.
+/// items whose a it owns, adding each item's force to both spheres. Items
+/// whose b belongs to a later thread ("cross" items) are computed first into
+/// a buffer, which their b sphere reads before its own items: every sphere
+/// then sums its items in the same order (b side in item order, then a side)
+/// whatever T is.
 struct SweepIndex
 {
   std::vector<std::int32_t> first;      ///< items with a = i: [first[i], first[i + 1])
@@ -41,7 +42,6 @@ struct SweepIndex
   /// on b (3), torque factor q (3) or q_a (3) and q_b (3)
   std::vector<double> out;
   std::vector<std::vector<double>> geometry; ///< per thread: branches of one sphere's items
-  std::vector<std::int64_t> upto; ///< build()'s scratch: the items of the spheres before i, plus i
   int threads = 0;
   /// @throws std::runtime_error if the items are not sorted or out of range
   void build(std::size_t np, std::span<const std::int32_t> a, std::span<const std::int32_t> b,

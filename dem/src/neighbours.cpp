@@ -332,12 +332,7 @@ double NeighbourList::reach(std::span<const double> r, const Links& links)
   if (!_reach_known)
   {
     // (the links' initial distances never change: once per list)
-    _reach = 0.0;
-    for (std::size_t k = 0; k < links.size(); ++k)
-    {
-      const double rs = r[links.a[k]] + r[links.b[k]];
-      _reach = std::max(_reach, impl::closing_distance(links.d0[k], rs, _closure) - rs);
-    }
+    _reach = impl::closing_reach(r, links, _closure);
     _reach_known = true;
   }
   return _reach;

@@ -1,5 +1,6 @@
 #pragma once
 // Internal to dem/: items (links or neighbour pairs) sorted by (a, b).
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <stdexcept>
@@ -16,6 +17,26 @@ namespace dembridge::dem::impl
 /// itself at c = 1. The force loop's contacts and the neighbour list's reach
 /// both take it from here.
 inline double closing_distance(double d0, double rs, double c) { return d0 - (1.0 - c) * (d0 - rs); }
+
+/// The most a broken link's closing distance exceeds R_a + R_b over the
+/// links (a < b index radii r), for crack closure c; 0 without closure. The
+/// neighbour list reaches that much farther, and no pair touches beyond
+/// R_a + R_b plus it (the compaction's set only shortens a link's: law.h).
+template <typename Links>
+double closing_reach(std::span<const double> r, const Links& l, double c)
+{
+  if (!(c > 0.0))
+    return 0.0;
+  double reach = 0.0;
+  const auto n = static_cast<std::int64_t>(l.size());
+#pragma omp parallel for schedule(static) reduction(max : reach) num_threads(threads_for(l.size()))
+  for (std::int64_t k = 0; k < n; ++k)
+  {
+    const double rs = r[l.a[k]] + r[l.b[k]];
+    reach = std::max(reach, closing_distance(l.d0[k], rs, c) - rs);
+  }
+  return reach;
+}
 
 /// first[i]: the start of the items with a = i, so they are
 /// [first[i], first[i + 1]). @throws std::runtime_error naming `what` if the

@@ -22,8 +22,7 @@ void SweepIndex::build(std::size_t np, std::span<const std::int32_t> a,
   // 2) a split by spheres left one thread 24 % more items (coupled bar).
   // upto[i]: the items of spheres [0, i), plus i; and the most items of one
   // sphere
-  upto.resize(np + 1);
-  upto[0] = 0;
+  std::vector<std::int64_t> upto(np + 1, 0);
   std::int32_t most = 0;
 #pragma omp parallel for schedule(static) reduction(max : most) num_threads(nt)
   for (std::size_t i = 0; i < np; ++i)
@@ -91,8 +90,7 @@ std::size_t SweepIndex::bytes() const
 {
   std::size_t s = (first.capacity() + cross_first.capacity() + in_first.capacity() + in.capacity()
                    + cross_i.capacity() + cross_k.capacity())
-                      * sizeof(std::int32_t)
-                  + upto.capacity() * sizeof(std::int64_t)
+             * sizeof(std::int32_t)
          + out.capacity() * sizeof(double) + bounds.capacity() * sizeof(std::size_t);
   for (const auto& g : geometry)
     s += g.capacity() * sizeof(double);
