@@ -25,7 +25,10 @@
   half-space z < -c: in each band of distance d from the axis the solid
   fraction is the mean of arccos(c / d) / pi over the band (points uniform
   in the cross-section, so weighted by d), within 5 standard errors of the
-  points' count.
+  points' count;
+- scripts/damage_map.py: spheres damaged exactly where depth < 60 mm and
+  distance from the path < 40 mm give shares 1 and 0 in the bands that
+  split there, and none in an empty band.
 Usage: check_scripts.py SOURCE_DIR"""
 import math
 import os
@@ -34,6 +37,7 @@ import sys
 sys.path.insert(0, os.path.join(sys.argv[1], "scripts"))
 import ballistic  # noqa: E402
 import bar_packing  # noqa: E402
+import damage_map  # noqa: E402
 import numpy as np  # noqa: E402
 import penetration  # noqa: E402
 import resistance  # noqa: E402
@@ -113,6 +117,16 @@ for lo, hi, f, n in bar_packing.fractions(pts, inside, dist, np.array([0.0, 0.00
     print(f"bar_packing: {1e3 * lo:.0f}-{1e3 * hi:.0f} mm: {f:.4f} against {expected:.4f} ({n} points)")
     if n < 100 or not abs(f - expected) <= err:
         problems.append(f"bar_packing: band {lo}-{hi} m: {f} instead of {expected} (+-{err})")
+# damage_map: damaged where depth < 60 mm and within 40 mm of the path;
+# no sphere beyond 300 mm from it
+depth = rng.uniform(0.0, 200.0, 20000)
+dist = rng.uniform(0.0, 300.0, 20000)
+damaged = (depth < 60.0) & (dist < 40.0)
+shares = damage_map.band_shares(damaged, depth, dist, [0.0, 60.0, 200.0], [0.0, 40.0, 300.0, 400.0])
+want = [[1.0, 0.0, None], [0.0, 0.0, None]]
+print(f"damage_map: {shares} (expected {want})")
+if shares != want:
+    problems.append(f"damage_map: shares {shares} instead of {want}")
 for q in problems:
     print(q)
 sys.exit(1 if problems else 0)

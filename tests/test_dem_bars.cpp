@@ -584,7 +584,7 @@ TEST_CASE("a projectile striking a bar: momentum, energy, the bar bends", "[bars
   CHECK(std::abs(e.imbalance()) < 1e-3 * e0);
 }
 
-TEST_CASE("spheres on a bar beyond their bonds: one push along the normal, none while bonded", "[bars][contact]")
+TEST_CASE("spheres on a bar beyond their bonds: one push along the normal, none while bonded or embedded", "[bars][contact]")
 {
   // A sphere of 3 mm overlapping a 6 mm bar by delta = 0.5 mm (its centre
   // 5.5 mm from the axis). Its bond's radial spring carries it while the
@@ -655,6 +655,19 @@ TEST_CASE("spheres on a bar beyond their bonds: one push along the normal, none 
   std::fill(q.f.begin(), q.f.end(), 0.0);
   bar_contact_forces(two, q, c2, m, gone);
   CHECK(q.f[1] == 0.0);
+
+  // embedded bars (sphere_contacts false): the same open bond, the same
+  // overlap, and no push: the sphere belongs to the concrete the bar lies in
+  bars.sphere_contacts = false;
+  BarContacts c3;
+  refresh_bar_contacts(bars, p, c3, nl);
+  CHECK(c3.sphere.empty());
+  std::fill(p.f.begin(), p.f.end(), 0.0);
+  std::fill(bars.f.begin(), bars.f.end(), 0.0);
+  bar_contact_forces(bars, p, c3, m);
+  CHECK(p.f == std::vector<double>(3, 0.0));
+  CHECK(bars.f == std::vector<double>(bars.f.size(), 0.0));
+  CHECK(bar_contact_energy(bars, p, c3, m) == 0.0);
 }
 
 TEST_CASE("a sphere striking a free bar: the elastic collision's outcome", "[bars][contact]")

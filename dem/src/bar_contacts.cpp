@@ -143,7 +143,7 @@ void refresh_bar_contacts(const Bars& bars, const Particles& p, BarContacts& c, 
   c.x_refresh = bars.x;
   c.x_spheres = p.x;
   c.refreshed = true;
-  if (bars.elements() == 0 || p.size() == 0)
+  if (bars.elements() == 0 || p.size() == 0 || !bars.sphere_contacts)
     return;
   const double rmax = *std::max_element(p.r.begin(), p.r.end());
   c.grid = bar_grid(bars, c.grid, rmax + impl::max_bar_radius(bars) + 2.0 * skin, 2.0 * skin);

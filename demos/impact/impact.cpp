@@ -155,9 +155,10 @@ private:
     _fraction = concrete_fraction(_pk, region, _bars); // over the slab's volume less the bars'
     const Material& mat = _s.material.material;
     // a packing file's spheres that overlap a bar are left out (a generated
-    // packing was made around the bars: pack_around_bars)
+    // packing was made around the bars: pack_around_bars), unless the bars
+    // are embedded
     std::vector<double> x = _pk.x, r = _pk.r;
-    if (_s.reinforcement.any() && !t.packing_file.empty())
+    if (_s.reinforcement.any() && !_s.reinforcement.embedded && !t.packing_file.empty())
       clear_bars(x, r);
     _p = make_particles(x, r, mat.density, _fraction);
     const auto bulk = bulk_spheres(region, _p.x, _p.r);
@@ -197,7 +198,7 @@ private:
         std::cout << ", " << t.fine_mean() << " m within " << t.fine_radius << " m of the path";
       std::cout << ")..." << std::endl;
     }
-    if (!_s.reinforcement.any())
+    if (!_s.reinforcement.any() || _s.reinforcement.embedded)
       return generate_packing(region, po);
     ConcretePacking c = pack_around_bars(region, _bars, po);
     if (!_cfg.quiet)
@@ -215,6 +216,7 @@ private:
     try
     {
       _bars = make_bars(bar_lines(_s), {b.steel}, {b.bond}, h);
+      _bars.sphere_contacts = !b.embedded;
     }
     catch (const std::exception& e)
     {
@@ -406,7 +408,8 @@ private:
                                {"elements", _bars.elements()},
                                {"bonds", _bonds},
                                {"bar_mass_kg", mass},
-                               {"spheres_left_out", _spheres_on_bars}};
+                               {"spheres_left_out", _spheres_on_bars},
+                               {"embedded", _s.reinforcement.embedded}};
     }
   }
 
@@ -531,7 +534,8 @@ private:
               << _supported << " held\n";
     if (_s.reinforcement.any())
       std::cout << "# reinforcement: " << _out["reinforcement"]["bars"] << " bars of " << _s.reinforcement.bar_diameter
-                << " m, " << _bars.elements() << " elements, " << _bonds << " bonds; f_y " << _s.reinforcement.steel.yield
+                << " m" << (_s.reinforcement.embedded ? " (embedded)" : "") << ", " << _bars.elements()
+                << " elements, " << _bonds << " bonds; f_y " << _s.reinforcement.steel.yield
                 << " Pa, bond tau_max " << _s.reinforcement.bond.tau_max << " Pa\n";
     std::cout << "# projectile " << fmt(_body.mass) << " kg at " << _s.projectile.velocity
               << " m/s (" << fmt(_ke0) << " J); dt " << fmt(_dt) << " s (critical " << fmt(_dt_crit) << "), up to "

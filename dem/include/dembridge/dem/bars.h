@@ -133,6 +133,11 @@ struct Bars
   std::vector<double> tau, slip, slip_max; ///< bond stress [Pa], slip [m] (sphere along the bar), largest |slip|
   std::vector<double> gap, gap_max;        ///< radial gap [m] (> 0 apart) at the last step, the largest so far
   std::vector<std::uint8_t> open;          ///< 1: the bond opened (no force any more)
+  /// true: spheres beyond their bonds are pushed off the bars (BarContacts;
+  /// the packing leaves the bars room). false: embedded bars, whose
+  /// cylinders the concrete's spheres fill: the bars meet the spheres only
+  /// through their bonds (the spheres they cross are bonded to them).
+  bool sphere_contacts = true;
   std::size_t nodes() const { return m.size(); }
   std::size_t elements() const { return a.size(); }
   std::size_t bonds() const { return sphere.size(); }
@@ -250,7 +255,8 @@ double bar_body_energy(const Bars& bars, const RigidBody& b);
 /// Per sphere and bar (polyline) only the nearest element acts: a sphere
 /// at a node between two elements is pushed once. A sphere with an intact
 /// bond is left to its bond's radial spring on that bar, and touches the
-/// others.
+/// others. Embedded bars (Bars::sphere_contacts false) have no such
+/// contacts: the functions below find none, add nothing and count zero.
 struct BarGridCache; // the elements' grid (bar_contacts.cpp)
 struct BarContacts
 {
