@@ -7,7 +7,8 @@ run (docs/validation.md 7b.2 compares slabs with and without bars this way).
 The bands are taken on the spheres' initial positions (frame 0), so that a
 band holds the same spheres at every frame. Depth is measured from the
 slab's front face (z = 0) into it, the distance from the path from the aim
-point along z (a normal impact). A band with no sphere prints '-'.
+point along z: a normal impact (an oblique one is refused). A band with no
+sphere prints '-'.
 
 Usage: damage_map.py RUN_DIR [--frame K] [--threshold D]
          [--depths MM ...] [--radii MM ...]
@@ -19,7 +20,6 @@ import json
 import pathlib
 import sys
 
-import h5py
 import numpy as np
 
 
@@ -55,13 +55,20 @@ def main():
     scenario = a.run / "scenario.json"
     if scenario.is_file():
         resolved = json.loads(scenario.read_text())
-        aim = resolved.get("projectile.aim_m", resolved.get("projectile", {}).get("aim_m", aim))
+        aim = resolved.get("projectile.aim_m", aim)
+        obliquity = resolved.get("projectile.obliquity_deg", 0.0)
+        if obliquity != 0.0:
+            sys.exit(f"{a.run}: projectile.obliquity_deg = {obliquity}: the bands are about a path along z; "
+                     "allowed 0 (a normal impact)")
+    import h5py  # here, so that the band arithmetic can be imported without it
     try:
         f = h5py.File(h5, "r")
     except OSError as e:
         sys.exit(f"{h5}: cannot be read ({e}; is the run still writing it?)")
     with f:
         frames = sorted(int(k.split("_")[1]) for k in f if k.startswith("frame_"))
+        if not frames:
+            sys.exit(f"{h5}: no frame written")
         frame = frames[a.frame] if -len(frames) <= a.frame < len(frames) else None
         if frame is None:
             sys.exit(f"--frame {a.frame}: allowed -{len(frames)} to {len(frames) - 1} ({len(frames)} frames)")

@@ -182,6 +182,8 @@ void refresh_bar_contacts(const Bars& bars, const Particles& p, BarContacts& c, 
 void bar_contact_forces(Bars& bars, Particles& p, BarContacts& c, const Material& m,
                         std::span<const std::uint8_t> gone)
 {
+  if (!bars.sphere_contacts)
+    return;
   mark_bonded(bars, c.bonded, p.size());
   for_each_touch(bars, p, c, c.bonded, gone, [&](const Touch& t)
                  {
@@ -200,6 +202,8 @@ void bar_contact_forces(Bars& bars, Particles& p, BarContacts& c, const Material
 double bar_contact_energy(const Bars& bars, const Particles& p, const BarContacts& c, const Material& m,
                           std::span<const std::uint8_t> gone)
 {
+  if (!bars.sphere_contacts)
+    return 0.0;
   std::vector<std::int32_t> flags;
   mark_bonded(bars, flags, p.size());
   double e = 0.0;

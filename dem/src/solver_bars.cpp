@@ -131,6 +131,7 @@ void DemSolver::save_bars(const checkpoint::Group& g) const
   g.write("contact_x_refresh", _bar_contacts.x_refresh);
   g.write("contact_x_spheres", _bar_contacts.x_spheres);
   g.write_int("contact_refreshed", _bar_contacts.refreshed ? 1 : 0);
+  g.write_int("sphere_contacts", b.sphere_contacts ? 1 : 0);
 }
 
 void DemSolver::load_bars(const checkpoint::Group& g)
@@ -156,6 +157,9 @@ void DemSolver::load_bars(const checkpoint::Group& g)
   for (std::size_t q = 0; q < _bar_reac.size(); ++q)
     for (int k = 0; k < 3; ++k)
       _bar_reac[q][k] = reac[3 * q + k];
+  if (g.has("sphere_contacts") && (g.read_int("sphere_contacts") != 0) != b.sphere_contacts)
+    g.fail("sphere_contacts", b.sphere_contacts ? "the checkpoint's bars are embedded, these are not (another set-up)"
+                                                : "these bars are embedded, the checkpoint's are not (another set-up)");
   BarContacts& c = _bar_contacts;
   if (!g.has("contact_spheres"))
     return; // written before the contacts: they are found at the first step

@@ -152,15 +152,14 @@ private:
     if (_pk.size() == 0)
       throw std::runtime_error("target: no sphere in the slab (target.mean_radius_m " + fmt(t.mean_radius)
                                + " m against its size): use smaller spheres");
-    _fraction = concrete_fraction(_pk, region, _bars); // over the slab's volume less the bars'
-    const Material& mat = _s.material.material;
     // a packing file's spheres that overlap a bar are left out (a generated
     // packing was made around the bars: pack_around_bars), unless the bars
-    // are embedded
-    std::vector<double> x = _pk.x, r = _pk.r;
+    // are embedded; the solid fraction is then taken over the spheres kept
     if (_s.reinforcement.any() && !_s.reinforcement.embedded && !t.packing_file.empty())
-      clear_bars(x, r);
-    _p = make_particles(x, r, mat.density, _fraction);
+      clear_bars(_pk.x, _pk.r);
+    _fraction = concrete_fraction(_pk, region, _bars); // over the slab's volume less the bars'
+    const Material& mat = _s.material.material;
+    _p = make_particles(_pk.x, _pk.r, mat.density, _fraction);
     const auto bulk = bulk_spheres(region, _p.x, _p.r);
     _lambda = lambda_for_mean_links(_p.x, _p.r, _s.material.links_per_sphere, bulk);
     _links = create_links(_p, _lambda, mat);

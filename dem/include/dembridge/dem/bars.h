@@ -136,7 +136,8 @@ struct Bars
   /// true: spheres beyond their bonds are pushed off the bars (BarContacts;
   /// the packing leaves the bars room). false: embedded bars, whose
   /// cylinders the concrete's spheres fill: the bars meet the spheres only
-  /// through their bonds (the spheres they cross are bonded to them).
+  /// through their bonds (create_bonds bonds each sphere within reach, those
+  /// a bar crosses among them, to its nearest element). In the checkpoint.
   bool sphere_contacts = true;
   std::size_t nodes() const { return m.size(); }
   std::size_t elements() const { return a.size(); }
@@ -256,7 +257,8 @@ double bar_body_energy(const Bars& bars, const RigidBody& b);
 /// at a node between two elements is pushed once. A sphere with an intact
 /// bond is left to its bond's radial spring on that bar, and touches the
 /// others. Embedded bars (Bars::sphere_contacts false) have no such
-/// contacts: the functions below find none, add nothing and count zero.
+/// contacts: the functions below find none, add nothing and count zero,
+/// whatever pairs BarContacts holds.
 struct BarGridCache; // the elements' grid (bar_contacts.cpp)
 struct BarContacts
 {
