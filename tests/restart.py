@@ -13,13 +13,15 @@ and exits 130), and restarts it with --restart B/checkpoint.h5. Checks:
   dataset of B equals A's, bit for bit (same datasets, same values);
 - a restart with another value of a set-up option (--bad OPTION VALUE) is
   refused with exit code 1 and a message naming the option (or, for --set
-  KEY=VALUE, the scenario key).
+  KEY=VALUE, the scenario key); with --before TEXT, before the run printed
+  TEXT (a message of its set-up, e.g. the packing's: refused before any
+  set-up is spent on it).
 
 With --kill, the run is killed (SIGKILL, no checkpoint of its own) a moment
 after its first periodic checkpoint instead: the restart then continues from
 that older checkpoint, dropping the frames and CSV rows written after it.
 
-Usage: restart.py --every N [--kill] [--bad OPTION VALUE] EXE ARGS...
+Usage: restart.py --every N [--kill] [--bad OPTION VALUE [--before TEXT]] EXE ARGS...
 """
 import glob
 import json
@@ -77,7 +79,7 @@ def compare_h5(fa, fb, problems):
 
 
 def main(argv):
-    every, bad, kill = None, None, False
+    every, bad, kill, before = None, None, False, None
     while argv and argv[0].startswith("--"):
         if argv[0] == "--kill":
             kill, argv = True, argv[1:]
@@ -85,6 +87,8 @@ def main(argv):
             every, argv = argv[1], argv[2:]
         elif argv[0] == "--bad":
             bad, argv = argv[1:3], argv[3:]
+        elif argv[0] == "--before":
+            before, argv = argv[1], argv[2:]
         else:
             raise SystemExit(__doc__)
     if not argv or every is None:
@@ -113,11 +117,14 @@ def main(argv):
         if not kill and (s.get("completed") is not False or s.get("checkpoint") != ckpt):
             problems.append(f"interrupted summary: {s}")
         if bad:
-            r = run(argv + [bad[0], bad[1], "--output", B, "--restart", ckpt])
+            r = subprocess.run(argv + [bad[0], bad[1], "--output", B, "--restart", ckpt], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
             # the option named, or the scenario key a --set changed
             named = bad[0] in r.stderr or bad[1].split("=")[0] in r.stderr
             if r.returncode != 1 or not named or "differs from the checkpointed run" not in r.stderr:
                 problems.append(f"restart with {bad[0]} {bad[1]}: exit {r.returncode}, {r.stderr.strip()[-300:]!r}")
+            if before and before in r.stdout:
+                problems.append(f"restart with {bad[0]} {bad[1]}: refused only after the set-up printed {before!r}")
         r = run(argv + ["--output", B, "--summary", B + ".json", "--restart", ckpt])
         if r.returncode != 0:
             print(f"the restart failed (exit {r.returncode}): {r.stderr[-400:]}")

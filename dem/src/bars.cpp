@@ -308,21 +308,88 @@ std::vector<std::uint8_t> spheres_on_bars(const Bars& bars, std::span<const doub
 }
 
 
+namespace
+{
+/// The bars' elements near each cell of an ElementGrid, sorted by a lower
+/// bound of their surface's distance from any point of the cell: the
+/// distance between the cell's box and the element's axis' box, less its
+/// bar radius (a point's distance to a segment is at least that to the
+/// segment's box). A query scans its cell's list in that order and stops
+/// at the first bound past what it has found, so that it evaluates the few
+/// nearest elements of a cell, not every element within the grid's reach.
+struct SortedElements
+{
+  ElementGrid grid;
+  std::vector<double> bound; ///< per item of grid.items, ascending in each cell
+
+  SortedElements(const Bars& bars, double reach) : grid(element_grid(bars, reach))
+  {
+    bound.resize(grid.items.size());
+    const std::size_t cells = grid.start.size() - 1;
+    // a margin below the bound: the computed distances may fall below the
+    // exact ones by rounding, and no element may be skipped for it
+    const double margin = 1e-9 * (grid.cell + reach);
+    std::vector<std::pair<double, std::int32_t>> list;
+    for (std::size_t id = 0; id < cells; ++id)
+    {
+      const std::size_t i0 = grid.start[id], i1 = grid.start[id + 1];
+      if (i0 == i1)
+        continue;
+      const std::size_t c[3] = {id / (std::size_t(grid.n[1]) * grid.n[2]), id / grid.n[2] % grid.n[1],
+                                id % grid.n[2]};
+      list.clear();
+      for (std::size_t i = i0; i < i1; ++i)
+      {
+        const std::int32_t e = grid.items[i];
+        double gap2 = 0.0;
+        for (int k = 0; k < 3; ++k)
+        {
+          const double lo = grid.lo[k] + c[k] * grid.cell, hi = lo + grid.cell;
+          const double a = bars.x[3 * bars.a[e] + k], b = bars.x[3 * bars.b[e] + k];
+          const double gap = std::max({0.0, std::min(a, b) - hi, lo - std::max(a, b)});
+          gap2 += gap * gap;
+        }
+        list.emplace_back(std::sqrt(gap2) - bar_radius(bars, e) - margin, e);
+      }
+      std::sort(list.begin(), list.end());
+      for (std::size_t i = i0; i < i1; ++i)
+      {
+        bound[i] = list[i - i0].first;
+        grid.items[i] = list[i - i0].second;
+      }
+    }
+  }
+};
+} // namespace
+
 Region region_without_bars(const Region& region, const Bars& bars, double rmax)
 {
   // within `reach` of a bar the distance is exact; beyond, the bars' part
   // is at least reach - rb, past what the packing looks
   const double rb = max_bar_radius(bars), reach = 6.0 * rmax + 2.0 * rb;
-  auto grid = std::make_shared<const ElementGrid>(element_grid(bars, reach));
+  auto near = std::make_shared<const SortedElements>(bars, reach);
   auto shared = std::make_shared<Bars>(bars);
   const double far = reach - rb; // no element within this of a cell's point it does not list
   auto base = region.sdf;
-  auto sdf = [base, grid, shared, far](const Point& x)
+  auto sdf = [base, near, shared, far](const Point& x)
   {
+    // max(base, -bars_part), bars_part = min(far, min over the elements of
+    // their surface's distance); an element whose bound is past both what
+    // was found and -base cannot change the result (a nearer bar surface
+    // than -base is the only way the bars' part wins), so the sorted scan
+    // stops there and the result is the full minimum's, bit for bit
+    const double b = base(x);
     double bars_part = far;
-    for (std::int32_t e : grid->near(x.data()))
-      bars_part = std::min(bars_part, distance_to_element(*shared, e, x.data())[0] - bar_radius(*shared, e));
-    return std::max(base(x), -bars_part);
+    const std::int64_t id = near->grid.index(x);
+    if (id >= 0)
+      for (std::int64_t i = near->grid.start[id]; i < near->grid.start[id + 1]; ++i)
+      {
+        if (near->bound[i] >= std::min(bars_part, -b))
+          break;
+        const std::int32_t e = near->grid.items[i];
+        bars_part = std::min(bars_part, distance_to_element(*shared, e, x.data())[0] - bar_radius(*shared, e));
+      }
+    return std::max(b, -bars_part);
   };
   return sdf_region(region.name + " less the bars", sdf, region.lo, region.hi);
 }

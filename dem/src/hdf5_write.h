@@ -37,6 +37,8 @@ inline void replace_text_file(const std::filesystem::path& file, const std::stri
   {
     std::ofstream out(tmp);
     out << text;
+    if (!out.flush())
+      throw std::runtime_error("cannot write '" + tmp + "' (disk full?)");
   }
   std::filesystem::rename(tmp, file);
 }

@@ -1,6 +1,9 @@
 #include "dembridge/dem/material_file.h"
 
+#include <cmath>
 #include <fstream>
+#include <set>
+#include <string>
 #include <stdexcept>
 
 namespace dembridge::dem
@@ -61,37 +64,93 @@ void read_reinforcement_laws(const nlohmann::json& j, const std::filesystem::pat
 }
 } // namespace
 
+namespace
+{
+/// The top-level keys of a material file (format 2; format 1 lacks steel and bond).
+const std::set<std::string> known_keys{
+    "format", "youngs_modulus_pa", "poisson_ratio", "density_kg_m3", "alpha", "beta", "gamma",
+    "tensile_strength_pa", "cohesion_pa", "softening", "phi_i_deg", "phi_c_deg", "links_per_sphere",
+    "rate_fc_pa", "rate_max_1_s", "rate_cohesion", "rate_mean_tension", "rate_filter_s", "rate_current",
+    "contact_shear_limit_pa", "rolling_friction", "crack_closure", "compaction_onset", "compaction_stiffness",
+    "compaction_lock", "compaction_pressure_pa", "steel", "bond", "lambda", "macroscopic", "calibration"};
+
+/// The "macroscopic" block: what the parameters reproduce. Free-form, but the
+/// values other programs read from it (the FE side's E and nu, the section
+/// theory's sigma_t) are checked to be physical where they are read.
+void check_macroscopic(const nlohmann::json& m, const std::filesystem::path& file)
+{
+  const std::string at = "material file '" + file.string() + "': ";
+  if (!m.is_object())
+    throw std::runtime_error(at + "\"macroscopic\" must be an object of measured values");
+  struct Range
+  {
+    const char* key;
+    double lo, hi;
+    bool open_lo;
+    const char* allowed;
+  };
+  static const Range ranges[] = {{"youngs_modulus_pa", 0.0, 1e13, true, "> 0 Pa"},
+                                 {"compression_test_modulus_pa", 0.0, 1e13, true, "> 0 Pa"},
+                                 {"poisson_ratio", -1.0, 0.5, true, "in (-1, 0.5)"},
+                                 {"tensile_strength_pa", 0.0, 1e12, true, "> 0 Pa"},
+                                 {"compressive_strength_pa", 0.0, 1e12, true, "> 0 Pa"}};
+  for (const Range& r : ranges)
+  {
+    if (!m.contains(r.key))
+      continue;
+    const nlohmann::json& v = m[r.key];
+    if (!v.is_number())
+      throw std::runtime_error(at + "'macroscopic." + r.key + "' must be a number, not " + v.dump());
+    const double x = v.get<double>();
+    const bool ok = std::isfinite(x) && x > r.lo && (std::string(r.key) == "poisson_ratio" ? x < r.hi : x <= r.hi);
+    if (!ok)
+      throw std::runtime_error(at + "'macroscopic." + r.key + "' = " + v.dump() + ": must be " + r.allowed);
+  }
+}
+} // namespace
+
 MaterialFile read_material(const std::filesystem::path& file)
 {
   std::ifstream in(file);
   if (!in)
     throw std::runtime_error("cannot open material file '" + file.string() + "'");
+  const std::string at = "material file '" + file.string() + "': ";
   nlohmann::json j;
   try
   {
     in >> j;
   }
-  catch (const std::exception& e)
+  catch (const std::exception&)
   {
-    throw std::runtime_error("material file '" + file.string() + "' is not valid JSON: " + e.what());
+    throw std::runtime_error("material file '" + file.string() + "' is not valid JSON (a file that calibrate "
+                             "writes: one object of named values)");
   }
+  if (!j.is_object())
+    throw std::runtime_error(at + "must hold one JSON object of named values ({\"format\": ..., "
+                             "\"youngs_modulus_pa\": ...}), not " + std::string(j.type_name()));
+  for (const auto& [key, _] : j.items())
+    if (!known_keys.count(key))
+      throw std::runtime_error(at + "unknown key '" + key + "' (the keys are listed in docs/demos.md, "
+                               "\"Material files\")");
   auto get = [&](const char* key) -> double
   {
     if (!j.contains(key) || !j[key].is_number())
-      throw std::runtime_error("material file '" + file.string() + "': missing or non-numeric key '"
-                               + key + "'");
-    return j[key].get<double>();
+      throw std::runtime_error(at + "missing or non-numeric key '" + key + "'");
+    const double v = j[key].get<double>();
+    if (!std::isfinite(v))
+      throw std::runtime_error(at + "'" + key + "' is not a finite number");
+    return v;
   };
   auto get_bool = [&](const char* key) -> bool
   {
     if (!j[key].is_boolean())
-      throw std::runtime_error("material file '" + file.string() + "': key '" + key + "' must be true or false");
+      throw std::runtime_error(at + "key '" + key + "' must be true or false");
     return j[key].get<bool>();
   };
-  const std::string format = j.value("format", std::string());
+  const std::string format = j.contains("format") && j["format"].is_string() ? j["format"].get<std::string>() : "";
   if (format != "dembridge-material-1" && format != "dembridge-material-2")
-    throw std::runtime_error("material file '" + file.string() + "': \"format\": \"" + format
-                             + "\": expected \"dembridge-material-2\" (or -1, without steel and bond)");
+    throw std::runtime_error(at + "\"format\": " + (j.contains("format") ? j["format"].dump() : "missing")
+                             + ": expected \"dembridge-material-2\" (or -1, without steel and bond)");
   MaterialFile m;
   Material& t = m.material;
   t.youngs_modulus = get("youngs_modulus_pa");
@@ -104,6 +163,8 @@ MaterialFile read_material(const std::filesystem::path& file)
   t.phi_i_deg = get("phi_i_deg");
   t.phi_c_deg = get("phi_c_deg");
   m.links_per_sphere = get("links_per_sphere");
+  if (!(m.links_per_sphere > 0.0 && m.links_per_sphere <= 100.0))
+    throw std::runtime_error(at + "'links_per_sphere' = " + j["links_per_sphere"].dump() + ": must be in (0, 100]");
   // optional: the strain-rate effect (absent: none)
   if (j.contains("rate_fc_pa"))
     t.rate_fc = get("rate_fc_pa");
@@ -135,16 +196,25 @@ MaterialFile read_material(const std::filesystem::path& file)
   }
   if (format == "dembridge-material-2")
     read_reinforcement_laws(j, file, m);
-  m.lambda = j.value("lambda", 0.0);
-  m.macroscopic = j.value("macroscopic", nlohmann::json::object());
-  m.calibration = j.value("calibration", nlohmann::json::object());
+  else if (j.contains("steel") || j.contains("bond"))
+    throw std::runtime_error(at + "\"steel\" and \"bond\" need \"format\": \"dembridge-material-2\"");
+  if (j.contains("lambda"))
+  {
+    m.lambda = get("lambda");
+    if (m.lambda < 0.0)
+      throw std::runtime_error(at + "'lambda' = " + j["lambda"].dump() + ": must be >= 0");
+  }
+  // (null: none, as files of a MaterialFile without them were written)
+  m.macroscopic = j.contains("macroscopic") && !j["macroscopic"].is_null() ? j["macroscopic"] : nlohmann::json::object();
+  check_macroscopic(m.macroscopic, file);
+  m.calibration = j.contains("calibration") && !j["calibration"].is_null() ? j["calibration"] : nlohmann::json::object();
   try
   {
     t.validate();
   }
   catch (const std::exception& e)
   {
-    throw std::runtime_error("material file '" + file.string() + "': " + e.what());
+    throw std::runtime_error(at + e.what());
   }
   return m;
 }
@@ -202,14 +272,17 @@ void write_material(const std::filesystem::path& file, const MaterialFile& m)
                  {"radial_stiffness_pa_m", m.bond->radial_stiffness}, {"opening_pa", m.bond->opening},
                  {"opening_gap_m", m.bond->opening_gap}};
   j["lambda"] = m.lambda;
-  j["macroscopic"] = m.macroscopic;
-  j["calibration"] = m.calibration;
+  j["macroscopic"] = m.macroscopic.is_null() ? nlohmann::json::object() : m.macroscopic;
+  j["calibration"] = m.calibration.is_null() ? nlohmann::json::object() : m.calibration;
   if (file.has_parent_path())
     std::filesystem::create_directories(file.parent_path());
   std::ofstream out(file);
   if (!out)
     throw std::runtime_error("cannot write material file '" + file.string() + "'");
   out << j.dump(2) << "\n";
+  out.flush();
+  if (!out)
+    throw std::runtime_error("writing material file '" + file.string() + "' failed (disk full?)");
 }
 
 } // namespace dembridge::dem

@@ -443,7 +443,12 @@ Packing generate_packing(const Region& g, const PackingOptions& o)
                                               / (4.0 / 3.0 * std::numbers::pi * er3 * a * a * a)));
   }
   if (n < 2)
-    throw std::runtime_error("the region holds fewer than 2 spheres of that size: use smaller spheres");
+  {
+    std::ostringstream m;
+    m << "region '" << g.name << "' (" << g.volume << " m^3) holds fewer than 2 spheres of mean radius "
+      << o.mean_radius << " m: use smaller spheres or a larger region";
+    throw std::runtime_error(m.str());
+  }
   std::mt19937_64 gen(o.seed);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   Packing p;
@@ -836,6 +841,9 @@ void write_packing(const std::filesystem::path& file, const Packing& p)
   out << "# x y z r [m], " << p.size() << " spheres\n" << std::setprecision(17);
   for (std::size_t i = 0; i < p.size(); ++i)
     out << p.x[3 * i] << ' ' << p.x[3 * i + 1] << ' ' << p.x[3 * i + 2] << ' ' << p.r[i] << '\n';
+  out.flush();
+  if (!out)
+    throw std::runtime_error("writing packing file '" + file.string() + "' failed (disk full?)");
 }
 
 Packing read_packing(const std::filesystem::path& file)
@@ -872,6 +880,43 @@ Packing read_packing(const std::filesystem::path& file)
   if (p.r.empty())
     throw std::runtime_error("packing file '" + file.string() + "' holds no sphere");
   return p;
+}
+
+std::pair<double, std::size_t> largest_protrusion(const Region& region, const Packing& p)
+{
+  std::pair<double, std::size_t> worst{-1e300, 0};
+  for (std::size_t i = 0; i < p.size(); ++i)
+  {
+    const double out = (region.sdf({p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2]}) + p.r[i]) / p.r[i];
+    if (out > worst.first)
+      worst = {out, i};
+  }
+  return worst;
+}
+
+void check_packing_fits(const Region& region, const Packing& p, const std::string& what)
+{
+  const auto sphere = [&](std::size_t i)
+  {
+    std::ostringstream s;
+    s << "sphere " << i + 1 << " (centre " << p.x[3 * i] << ", " << p.x[3 * i + 1] << ", " << p.x[3 * i + 2]
+      << " m, radius " << p.r[i] << " m)";
+    return s.str();
+  };
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (region.sdf({p.x[3 * i], p.x[3 * i + 1], p.x[3 * i + 2]}) > 0.0)
+      throw std::runtime_error(what + ": " + sphere(i) + " is centred outside the region '" + region.name
+                               + "': not this region's packing");
+  // half a radius: far above a generated packing's round-off, far below
+  // what a file of another scale gives
+  const auto [out, i] = largest_protrusion(region, p);
+  if (out > 0.5)
+  {
+    std::ostringstream s;
+    s << what << ": " << sphere(i) << " lies " << out * p.r[i] << " m out of the region '" << region.name
+      << "' (allowed: half its radius): not this region's packing, or a radius out of scale";
+    throw std::runtime_error(s.str());
+  }
 }
 
 std::vector<std::uint8_t> inside(const Region& region, std::span<const double> x, double margin)

@@ -177,6 +177,8 @@ public:
   nlohmann::json run()
   {
     check_config(_c);
+    if (_c.restart)
+      _ckpt = std::make_unique<Checkpointer>(*_c.restart, _c.output);
     resolve_parameters();
     lay_out_regions();
     build_fe();
@@ -184,8 +186,6 @@ public:
     build_solvers();
     apply_conditions();
     set_up_probes();
-    if (_c.restart)
-      _ckpt = std::make_unique<Checkpointer>(*_c.restart, _c.output);
     if (_ckpt && _ckpt->restarting())
       resume();
     else
@@ -554,7 +554,7 @@ private:
         _after[1].push_back(v1);
       }
       if (_csv.is_open() && (k % std::max<std::int64_t>(1, nsteps / 2000) == 0 || k == nsteps))
-        _csv << t << ',' << v0 << ',' << v1 << ',' << end_value() << '\n';
+        _csv << t << ',' << v0 << ',' << v1 << ',' << end_value() << '\n' << std::flush; // whole rows if killed
       if (k % every == 0 || k == nsteps)
         write_frame(t);
       if (!_c.quiet && (k % std::max<std::int64_t>(1, nsteps / 10) == 0 || k == nsteps))
@@ -676,10 +676,11 @@ private:
     }
     if (!_c.output.empty())
     {
-      std::ofstream s(std::filesystem::path(_c.output) / "shape.csv");
+      std::ostringstream s;
       s << "x_m,displacement_m,beam_theory_m,source\n";
       for (const auto& r : rows)
         s << r[0] << ',' << r[1] << ',' << theory(r[0]) << ',' << (r[2] == 0.0 ? "fe" : "de") << '\n';
+      write_text(std::filesystem::path(_c.output) / "shape.csv", s.str());
     }
   }
 
@@ -835,7 +836,7 @@ nlohmann::json compare_cases(const BarConfig& c, const std::filesystem::path& ro
   std::string md;
   const auto table = compare_table(runs, md);
   std::cout << "\n" << md << std::endl;
-  std::ofstream(root / "comparison.md") << md;
+  write_text(root / "comparison.md", md);
   nlohmann::json all = {{"table", table}, {"runs", runs}};
   write_json(root / "comparison.json", all);
   return all;

@@ -132,7 +132,7 @@ int main(int argc, char** argv)
     std::string md;
     const auto scatter = demo::seeds_table(list, tables, md);
     std::cout << "\n" << md << std::endl;
-    std::ofstream(root / "seeds.md") << md;
+    demo::write_text(root / "seeds.md", md);
     demo::write_json(root / "seeds.json", scatter);
     if (!summary.empty())
       demo::write_summary(summary, scatter);

@@ -69,6 +69,10 @@ Checkpointer::Checkpointer(const RestartOptions& o, const std::string& output_di
     _file = o.file;
   else if (!output_dir.empty())
     _file = std::filesystem::path(output_dir) / "checkpoint.h5";
+  // a checkpoint of another set-up is refused now, before the run's set-up
+  // (packing, meshing) is spent on it
+  if (restarting())
+    open_restart();
 }
 
 checkpoint::File Checkpointer::open_restart() const

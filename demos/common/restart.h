@@ -51,6 +51,8 @@ class Checkpointer
 public:
   /// @param output_dir the run's output folder ("" = none), where the
   /// checkpoint goes unless --checkpoint names a file
+  /// @throws std::runtime_error when restarting from a checkpoint of another
+  ///   set-up (open_restart): construct it before the run's set-up.
   Checkpointer(const RestartOptions& o, const std::string& output_dir);
   /// True if this run writes checkpoints.
   bool enabled() const { return !_file.empty(); }

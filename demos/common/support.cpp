@@ -115,17 +115,22 @@ void write_summary(const std::filesystem::path& file, nlohmann::json j)
   write_json(file, j);
 }
 
-void write_json(const std::filesystem::path& file, const nlohmann::json& j)
+void write_text(const std::filesystem::path& file, const std::string& text)
 {
   if (file.has_parent_path())
     std::filesystem::create_directories(file.parent_path());
   std::ofstream out(file);
   if (!out)
     throw std::runtime_error("cannot write '" + file.string() + "': " + std::strerror(errno));
-  out << j.dump(2) << "\n";
+  out << text;
   out.flush();
   if (!out)
-    throw std::runtime_error("writing '" + file.string() + "' failed: " + std::strerror(errno));
+    throw std::runtime_error("writing '" + file.string() + "' failed (disk full?)");
+}
+
+void write_json(const std::filesystem::path& file, const nlohmann::json& j)
+{
+  write_text(file, j.dump(2) + "\n");
 }
 
 void echo_options(CLI::App& app)

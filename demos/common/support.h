@@ -8,6 +8,7 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,22 @@ class App;
 
 namespace dembridge::demo
 {
+
+/// Runs `f`; a std::exception it throws is thrown again as a
+/// std::runtime_error "context: what" (a library's message given the
+/// user's option or key that caused it).
+template <class F>
+auto with_context(const std::string& context, F&& f) -> decltype(f())
+{
+  try
+  {
+    return f();
+  }
+  catch (const std::exception& e)
+  {
+    throw std::runtime_error(context + ": " + e.what());
+  }
+}
 
 /// Initialises PETSc (and MPI), installs the SIGINT and SIGTERM handlers
 /// (stop_requested), runs `body`, prints any exception as "error: ..." on
@@ -53,6 +70,9 @@ void note_checkpoint(const std::filesystem::path& file);
 void write_summary(const std::filesystem::path& file, nlohmann::json j);
 
 /// Writes `j` as indented JSON to `file` (creating its folder).
+/// Writes `text` to `file` (its folder made). @throws naming the file if a
+/// write fails (a full disk).
+void write_text(const std::filesystem::path& file, const std::string& text);
 void write_json(const std::filesystem::path& file, const nlohmann::json& j);
 
 /// Prints every option of `app` with its resolved value (the run's header):

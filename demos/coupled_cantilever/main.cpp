@@ -61,13 +61,13 @@ public:
   nlohmann::json run()
   {
     check();
+    _ckpt = std::make_unique<demo::Checkpointer>(_c.restart, _c.output);
     resolve_materials();
     build_fe();
     build_de();
     couple();
     reference();
     clamp_and_start();
-    _ckpt = std::make_unique<demo::Checkpointer>(_c.restart, _c.output);
     if (_ckpt->restarting())
       resume();
     else
@@ -305,7 +305,7 @@ private:
     if (_csv.is_open())
       _csv << _ts.back() << ',' << _tips.back() << ',' << e.fe.kinetic << ',' << e.fe.strain << ','
            << e.de.kinetic << ',' << e.de.elastic << ',' << e.total() << ',' << e.imbalance() << ',' << r
-           << '\n';
+           << '\n' << std::flush; // whole rows if the run is killed
     if (_shell_out)
     {
       _shell_out->write(_ts.back(), _s->fe().u(), _s->fe().v());

@@ -76,7 +76,11 @@ Region sample_region(const SampleConfig& cfg)
 Packing sample_packing(const SampleConfig& cfg)
 {
   if (!cfg.packing_file.empty())
-    return read_packing(cfg.packing_file);
+  {
+    Packing p = read_packing(cfg.packing_file);
+    check_packing_fits(sample_region(cfg), p, "--packing " + cfg.packing_file);
+    return p;
+  }
   PackingOptions po;
   po.mean_radius = cfg.mean_radius;
   po.radius_ratio = cfg.radius_ratio;
@@ -97,6 +101,8 @@ public:
   nlohmann::json run()
   {
     check();
+    if (_cfg.restart)
+      _ckpt = std::make_unique<Checkpointer>(*_cfg.restart, _cfg.output_dir);
     build_sample();
     resolve_time_step();
     set_up_platens();
@@ -105,8 +111,6 @@ public:
     _solver->track_cohesion_demand();
     _solver->start();
     describe();
-    if (_cfg.restart)
-      _ckpt = std::make_unique<Checkpointer>(*_cfg.restart, _cfg.output_dir);
     if (_ckpt && _ckpt->restarting())
       resume();
     else
@@ -166,13 +170,17 @@ private:
       throw std::runtime_error("ligament " + std::to_string(cfg.ligament)
                                + ": the notched section's share must be in (0, 1] (1: no notch)");
     _area = (_cyl ? std::numbers::pi * D * D / 4.0 : D * D) * cfg.ligament;
-    _pk = sample_packing(cfg);
+    std::ostringstream keys;
+    keys << "--mean-radius " << cfg.mean_radius << " m in the " << cfg.shape << " (--diameter " << cfg.diameter
+         << " m, --height " << cfg.height << " m)";
+    _pk = cfg.packing_file.empty() ? with_context(keys.str(), [&] { return sample_packing(cfg); })
+                                   : sample_packing(cfg);
     double solid = 0.0;
     for (double r : _pk.r)
       solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
     _fraction = solid / _region.volume;
     _p = make_particles(_pk.x, _pk.r, cfg.material.density, _fraction);
-    _bulk = bulk_spheres(_region, _p.x, _p.r);
+    _bulk = with_context(keys.str(), [&] { return bulk_spheres(_region, _p.x, _p.r); });
     _lambda = cfg.lambda > 0.0 ? cfg.lambda : lambda_for_mean_links(_p.x, _p.r, cfg.links_per_sphere, _bulk);
     _links = create_links(_p, _lambda, cfg.material);
     if (cfg.ligament < 1.0)
@@ -646,7 +654,7 @@ private:
            << _solver->reaction("bottom")[2] << ',' << bt << ',' << bs << ',' << e.kinetic << ','
            << e.elastic << ',' << e.softening << ',' << e.breakage << ',' << e.friction << ','
            << e.damping << ',' << e.external_work + e.prescribed_work << ',' << e.imbalance()
-           << ',' << axial << ',' << f_top << ',' << confining << '\n';
+           << ',' << axial << ',' << f_top << ',' << confining << '\n' << std::flush; // whole rows if killed
     if (print && !_cfg.quiet)
       std::cout << std::scientific << std::setprecision(4) << std::setw(12) << strain
                 << std::setw(15) << stress << std::setw(7) << bt << "/" << std::left

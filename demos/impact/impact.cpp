@@ -92,7 +92,8 @@ namespace
 enum class Outcome
 {
   running,
-  perforated, ///< the tail is past the rear face and nothing touches the projectile
+  perforated, ///< it touched the slab, its tail is past the rear face and nothing touches it
+  missed,     ///< its tail is past the rear face and it never touched the slab
   stopped,    ///< the projectile's speed along its path fell to zero (or reversed)
   time_up     ///< the duration was reached first
 };
@@ -103,6 +104,7 @@ const char* outcome_name(Outcome o)
   {
   case Outcome::running: return "running";
   case Outcome::perforated: return "perforated";
+  case Outcome::missed: return "missed";
   case Outcome::stopped: return "stopped";
   case Outcome::time_up: return "time up";
   }
@@ -119,12 +121,12 @@ public:
 
   nlohmann::json run()
   {
+    if (_cfg.restart)
+      _ckpt = std::make_unique<Checkpointer>(*_cfg.restart, _cfg.output_dir);
     build_target();
     build_projectile();
     set_up_solver();
     describe();
-    if (_cfg.restart)
-      _ckpt = std::make_unique<Checkpointer>(*_cfg.restart, _cfg.output_dir);
     if (_ckpt && _ckpt->restarting())
       resume();
     else
@@ -145,10 +147,14 @@ private:
     const Region region = box_region(_lo, _hi);
     if (_s.reinforcement.any())
       make_the_bars();
+    // the dem module's errors name the region; the user's keys are these
+    const std::string keys = "target.mean_radius_m = " + fmt(t.mean_radius) + " m in the slab (target.size_m ["
+                             + fmt(t.size[0]) + ", " + fmt(t.size[1]) + "] m, thickness_m " + fmt(t.thickness)
+                             + " m)";
     if (!t.packing_file.empty())
       _pk = read_target_packing(region);
     else
-      _pk = pack(region);
+      _pk = with_context(keys, [&] { return pack(region); });
     if (_pk.size() == 0)
       throw std::runtime_error("target: no sphere in the slab (target.mean_radius_m " + fmt(t.mean_radius)
                                + " m against its size): use smaller spheres");
@@ -160,7 +166,7 @@ private:
     _fraction = concrete_fraction(_pk, region, _bars); // over the slab's volume less the bars'
     const Material& mat = _s.material.material;
     _p = make_particles(_pk.x, _pk.r, mat.density, _fraction);
-    const auto bulk = bulk_spheres(region, _p.x, _p.r);
+    const auto bulk = with_context(keys, [&] { return bulk_spheres(region, _p.x, _p.r); });
     _lambda = lambda_for_mean_links(_p.x, _p.r, _s.material.links_per_sphere, bulk);
     _links = create_links(_p, _lambda, mat);
     if (_s.reinforcement.any())
@@ -259,31 +265,14 @@ private:
       throw std::runtime_error("target.packing_file " + _s.target.packing_file + ": " + std::to_string(outside) + " of "
                                + std::to_string(pk.size()) + " spheres are centred outside the slab (size_m, "
                                "thickness_m): not this slab's packing");
+    check_packing_fits(region, pk, "target.packing_file " + _s.target.packing_file);
     return pk;
   }
 
   void build_projectile()
   {
     const ProjectileSpec& q = _s.projectile;
-    Shape sh;
-    sh.kind = Shape::Kind::projectile;
-    sh.diameter = q.diameter;
-    sh.length = q.length;
-    sh.nose = q.nose == "flat" ? Nose::flat
-              : q.nose == "hemispherical" ? Nose::hemispherical
-              : q.nose == "conical" ? Nose::conical
-                                   : Nose::ogive;
-    sh.crh = q.crh;
-    sh.cone_angle_deg = q.cone_angle_deg;
-    try
-    {
-      sh.validate();
-    }
-    catch (const std::exception& e)
-    {
-      throw std::runtime_error(std::string("projectile: ") + e.what() + " (projectile.length_m, diameter_m, crh, "
-                               "cone_angle_deg)");
-    }
+    const Shape sh = projectile_shape(q); // checked when the scenario was read
     _dir = path_direction(q);
     const V3 aim{q.aim[0], q.aim[1], 0.0};
     const V3 tip{aim[0] - q.standoff * _dir[0], aim[1], aim[2] - q.standoff * _dir[2]};
@@ -518,7 +507,7 @@ private:
          << e.softening + e.compaction + e.breakage + e.friction + e.body_friction + e.damping + e.bar_plastic
                 + e.bar_opening + e.bar_slip + e.bar_broken
          << ',' << e.removed << ','
-         << e.imbalance() << '\n';
+         << e.imbalance() << '\n' << std::flush; // whole rows, as far as the frames, if the run is killed
   }
 
   void print_header() const
@@ -564,7 +553,7 @@ private:
     if (_touched && path_velocity() <= 0.02 * _s.projectile.velocity)
       return Outcome::stopped;
     if (-tail()[2] > _s.target.thickness + _s.projectile.diameter && !touching)
-      return Outcome::perforated;
+      return _touched ? Outcome::perforated : Outcome::missed;
     return Outcome::running;
   }
 
@@ -623,13 +612,16 @@ private:
   void report()
   {
     const RigidBody& b = _solver->body(0);
+    // perforated: it touched the slab and its tail passed the rear face
     const bool perforated = _outcome == Outcome::perforated
-                            || (_outcome == Outcome::time_up && -tail()[2] > _s.target.thickness);
+                            || (_outcome == Outcome::time_up && _touched && -tail()[2] > _s.target.thickness);
     _out["outcome"] = outcome_name(_outcome);
     _out["perforated"] = perforated;
     _out["residual_velocity_m_s"] = perforated ? std::sqrt(dot(b.v, b.v)) : 0.0;
     _out["final_path_velocity_m_s"] = path_velocity();
-    _out["penetration_depth_m"] = std::clamp(_max_depth, 0.0, _s.target.thickness);
+    // without contact, no penetration (the tip's depth alone says nothing)
+    _out["penetration_depth_m"] = _touched ? std::clamp(_max_depth, 0.0, _s.target.thickness) : 0.0;
+    _out["touched"] = _touched;
     _out["tip_depth_max_m"] = _max_depth;
     _out["peak_contact_force_n"] = _peak_force;
     measure_damage();

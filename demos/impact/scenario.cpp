@@ -404,8 +404,8 @@ TargetSpec read_target(Reader& r)
   t.radius_ratio = r.number("radius_ratio", t.radius_ratio, Allowed::closed(1.0, 3.0), "Rmax / Rmin [-]");
   t.seed = static_cast<unsigned>(r.integer("seed", t.seed, Allowed::closed(0, 4294967295.0), "packing random seed"));
   t.packing_file = r.text("packing_file", "", "",
-                          "read the packing ('x y z r' [m], e.g. a run's packing.txt) instead of generating it; "
-                          "\"\" = generate");
+                          "read the packing ('x y z r' [m], e.g. a run's packing.txt) instead of generating it, "
+                          "relative to the scenario's folder; \"\" = generate");
   t.supports = r.text("supports", t.supports, "sides | rear-edges | none",
                       "sides: the spheres of the four lateral faces held; rear-edges: those of the rear face "
                       "within support_width_m of its edges; none: free");
@@ -536,7 +536,35 @@ Scenario read_sections(Reader& r, const std::filesystem::path& file)
   s.run = read_run(r);
   s.resolved = r.resolved();
   s.resolved["material.file"] = s.material.file;
+  if (!s.target.packing_file.empty())
+  {
+    // relative to the scenario's folder, as material.file
+    s.target.packing_file = beside(file, s.target.packing_file).string();
+    s.resolved["target.packing_file"] = s.target.packing_file;
+  }
   return s;
+}
+
+/// The projectile must strike the slab's face whole: its path (through
+/// projectile.aim_m) meets the face at least the projectile's radius from
+/// each edge. A path beside the slab, or one grazing its edge, would give no
+/// impact, or one on an edge that the slab's supports and size do not model.
+void check_path(const Scenario& s)
+{
+  const TargetSpec& t = s.target;
+  const ProjectileSpec& q = s.projectile;
+  const std::string at = "scenario " + s.file.string() + ": ";
+  const double r = 0.5 * q.diameter, ax = 0.5 * t.size[0] - r, ay = 0.5 * t.size[1] - r;
+  if (ax <= 0.0 || ay <= 0.0)
+    throw std::runtime_error(at + "projectile.diameter_m = " + number_text(q.diameter) + ": the projectile is not "
+                             "narrower than the slab (target.size_m = [" + number_text(t.size[0]) + ", "
+                             + number_text(t.size[1]) + "] m): give a wider slab or a narrower projectile");
+  if (std::abs(q.aim[0]) > ax || std::abs(q.aim[1]) > ay)
+    throw std::runtime_error(at + "projectile.aim_m = [" + number_text(q.aim[0]) + ", " + number_text(q.aim[1])
+                             + "]: the projectile (diameter " + number_text(q.diameter) + " m) would miss the slab "
+                             "or graze its edge: allowed |x| <= " + number_text(ax) + " m and |y| <= "
+                             + number_text(ay) + " m (the slab's half sizes, target.size_m / 2, less the "
+                             "projectile's radius)");
 }
 
 } // namespace
@@ -585,7 +613,19 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
     throw std::runtime_error("scenario " + file.string() + ": reinforcement.bar_diameter_m = 0: give the bars' "
                              "diameter (> 0 m) with layers or bars_m");
   bar_lines(s); // the layout's own checks
+  check_path(s);
+  try
+  {
+    projectile_shape(s.projectile);
+  }
+  catch (const std::exception& e)
+  {
+    throw std::runtime_error("scenario " + file.string() + ": " + e.what());
+  }
   const TargetSpec& t = s.target;
+  if (!t.packing_file.empty() && !std::filesystem::is_regular_file(t.packing_file))
+    throw std::runtime_error("scenario " + file.string() + ": target.packing_file = \"" + t.packing_file
+                             + "\": no such file (a relative name is taken from the scenario's folder)");
   if (t.fine())
   {
     const std::string at = "scenario " + file.string() + ": target.";
@@ -597,6 +637,30 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
                                "the file's spheres are used as they are; give one or the other");
   }
   return s;
+}
+
+dem::Shape projectile_shape(const ProjectileSpec& q)
+{
+  dem::Shape sh;
+  sh.kind = dem::Shape::Kind::projectile;
+  sh.diameter = q.diameter;
+  sh.length = q.length;
+  sh.nose = q.nose == "flat" ? dem::Nose::flat
+            : q.nose == "hemispherical" ? dem::Nose::hemispherical
+            : q.nose == "conical" ? dem::Nose::conical
+                                 : dem::Nose::ogive;
+  sh.crh = q.crh;
+  sh.cone_angle_deg = q.cone_angle_deg;
+  try
+  {
+    sh.validate();
+  }
+  catch (const std::exception& e)
+  {
+    throw std::runtime_error(std::string("projectile: ") + e.what() + " (projectile.length_m, diameter_m, crh, "
+                             "cone_angle_deg)");
+  }
+  return sh;
 }
 
 std::array<double, 3> path_direction(const ProjectileSpec& q)

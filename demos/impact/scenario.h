@@ -10,6 +10,7 @@
 
 #include "dembridge/dem/assembly.h"
 #include "dembridge/dem/bars.h"
+#include "dembridge/dem/body.h"
 #include "dembridge/dem/packing.h"
 
 #include <array>
@@ -128,6 +129,11 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
 ///   mats that do not fit in the thickness, a spacing not above the
 ///   diameter, a polyline with no part inside the slab.
 std::vector<dem::BarLine> bar_lines(const Scenario& s);
+
+/// The projectile's shape (its nose, diameter, length).
+/// @throws std::runtime_error naming the keys: a shape that cannot be made
+///   (a body shorter than its nose).
+dem::Shape projectile_shape(const ProjectileSpec& q);
 
 /// The unit vector of the projectile's path: along -z tilted by the
 /// obliquity towards +x.

@@ -371,6 +371,9 @@ private:
     for (std::size_t e = 0; e < b.elements(); ++e)
       out << b.line[e] << "," << 0.5 * (b.x0[3 * b.a[e]] + b.x0[3 * b.b[e]]) << "," << b.force[e] << ","
           << b.force[e] / b.area[e] << "," << b.alpha[e] << "\n";
+    out.flush();
+    if (!out)
+      throw std::runtime_error("writing " + file.string() + " failed (disk full?)");
   }
   /// The forces along the beam (x) across the section x = xs: the bars'
   /// and the concrete links' that cross it (tension > 0), with their mean
@@ -522,7 +525,7 @@ private:
         load_steps = 0;
         if (csv.is_open())
           csv << std::setprecision(10) << _solver->time() << "," << _delta.back() << "," << _load.back() << ","
-              << broken() << "," << stress << "\n";
+              << broken() << "," << stress << "\n" << std::flush; // whole rows if the run is killed
       }
       if (!_c.quiet && clock.seconds() - last > 2.0)
       {
@@ -683,6 +686,7 @@ private:
     out << "load_n,deflection_m,deflection_tension_stiffening_m\n" << std::setprecision(10);
     for (std::size_t i = 0; i < p.size(); ++i)
       out << p[i] << "," << d[i] << "," << d_ts[i] << "\n";
+    out.flush();
     if (!out)
       throw std::runtime_error("cannot write " + file.string());
   }

@@ -50,6 +50,8 @@ public:
   nlohmann::json run()
   {
     check();
+    if (_cfg.restart)
+      _ckpt = std::make_unique<Checkpointer>(*_cfg.restart, _cfg.output_dir);
     build_model();
     references();
     describe();
@@ -68,8 +70,6 @@ public:
     resolve_time_step();
     set_up_solver();
     initial_shape();
-    if (_cfg.restart)
-      _ckpt = std::make_unique<Checkpointer>(*_cfg.restart, _cfg.output_dir);
     if (_ckpt && _ckpt->restarting())
       resume();
     else
@@ -375,7 +375,7 @@ private:
     if (_csv.is_open())
       _csv << _solver->time() << "," << _tipv.back() << "," << e.kinetic << "," << e.strain << ","
            << e.external_work << "," << e.prescribed_work << "," << e.damping << ","
-           << e.imbalance() << "\n";
+           << e.imbalance() << "\n" << std::flush; // whole rows if the run is killed
     if (print && !_cfg.quiet)
       std::cout << std::scientific << std::setprecision(5) << std::setw(11) << _solver->time()
                 << std::setw(16) << e.kinetic << std::setw(16) << e.strain << std::setw(16)

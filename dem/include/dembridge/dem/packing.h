@@ -33,6 +33,7 @@
 #include <functional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace dembridge::dem
@@ -149,5 +150,16 @@ void write_packing(const std::filesystem::path& file, const Packing& p);
 /// Reads `x y z r` lines ('#' starts a comment). @throws std::runtime_error
 /// naming the file and line for a malformed line or a radius <= 0.
 Packing read_packing(const std::filesystem::path& file);
+/// The packing's largest protrusion out of `region`: the largest
+/// (sdf(centre) + r) / r over its spheres, with the sphere's index. A
+/// generated packing keeps every sphere inside (0 or below, to round-off);
+/// a file of another region's spheres, or one with a radius out of scale,
+/// gives far more.
+std::pair<double, std::size_t> largest_protrusion(const Region& region, const Packing& p);
+/// Checks that a packing read from a file fits `region`: every centre inside
+/// it, and no sphere out of it by more than half its radius.
+/// @throws std::runtime_error starting with `what` (the option or key and
+///   the file), naming the sphere, its radius and the region.
+void check_packing_fits(const Region& region, const Packing& p, const std::string& what);
 
 } // namespace dembridge::dem
