@@ -12,6 +12,7 @@
 #include "dembridge/shell/mesh.h"
 #include "dembridge/shell/model.h"
 #include "options.h"
+#include "fe_runtime.h"
 #include "support.h"
 
 #include <CLI/CLI.hpp>
@@ -98,5 +99,5 @@ int main(int argc, char** argv)
     out["peak_rss_bytes"] = demo::peak_rss_bytes();
     if (!summary.empty())
       demo::write_summary(summary, out);
-  }, summary);
+  }, summary, demo::petsc_runtime());
 }

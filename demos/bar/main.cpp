@@ -13,6 +13,7 @@
 //   build/bin/bar --compare --seeds 5 --output out/bar_seeds
 #include "bar.h"
 #include "options.h"
+#include "fe_runtime.h"
 #include "support.h"
 
 #include <CLI/CLI.hpp>
@@ -136,5 +137,5 @@ int main(int argc, char** argv)
     demo::write_json(root / "seeds.json", scatter);
     if (!summary.empty())
       demo::write_summary(summary, scatter);
-  }, summary);
+  }, summary, demo::petsc_runtime());
 }

@@ -10,8 +10,6 @@
 #include <chrono>
 #include <fstream>
 #include <iostream>
-#include <dolfinx/common/log.h>
-#include <petscsys.h>
 #include <spawn.h>
 #include <stdexcept>
 #include <sys/wait.h>
@@ -64,11 +62,12 @@ void check_stop(double t_reached)
     throw Interrupted(t_reached, stop_signal);
 }
 
-int run_guarded(int argc, char** argv, const std::function<void()>& body, const std::filesystem::path& summary)
+int run_guarded(int argc, char** argv, const std::function<void()>& body, const std::filesystem::path& summary,
+                const Runtime& runtime)
 {
-  PetscInitialize(&argc, &argv, nullptr, nullptr);
-  loguru::g_stderr_verbosity = loguru::Verbosity_WARNING; // DOLFINx INFO off
-  // after PETSc, which installs handlers of its own
+  if (runtime.start)
+    runtime.start(argc, argv);
+  // after the runtime (PETSc installs handlers of its own)
   std::signal(SIGINT, on_stop_signal);
   std::signal(SIGTERM, on_stop_signal);
   warn_threads();
@@ -105,7 +104,8 @@ int run_guarded(int argc, char** argv, const std::function<void()>& body, const 
     std::cerr << "error: " << e.what() << std::endl;
     rc = 1;
   }
-  PetscFinalize();
+  if (runtime.finish)
+    runtime.finish();
   return rc;
 }
 

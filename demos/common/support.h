@@ -36,14 +36,24 @@ auto with_context(const std::string& context, F&& f) -> decltype(f())
   }
 }
 
-/// Initialises PETSc (and MPI), installs the SIGINT and SIGTERM handlers
+/// What a program starts before its body and stops after it: PETSc (and
+/// MPI) for the programs with finite elements (fe_runtime.h), nothing for
+/// those of discrete elements alone, which neither link DOLFINx nor start
+/// MPI.
+struct Runtime
+{
+  std::function<void(int&, char**&)> start; ///< empty: nothing
+  std::function<void()> finish;             ///< empty: nothing
+};
+
+/// Starts `runtime`, installs the SIGINT and SIGTERM handlers
 /// (stop_requested), runs `body`, prints any exception as "error: ..." on
 /// stderr and returns a non-zero exit code for it: 1 for an error, 128 +
 /// the signal's number (130, 143) for an interrupted run, whose summary, if
 /// `summary` names one, is written with "completed": false and the time
 /// reached. Warns when OMP_NUM_THREADS asks for more threads than cores.
 int run_guarded(int argc, char** argv, const std::function<void()>& body,
-                const std::filesystem::path& summary = {});
+                const std::filesystem::path& summary = {}, const Runtime& runtime = {});
 
 /// True once SIGINT or SIGTERM arrived: a run stops at the end of the step
 /// it is in (a second signal ends the process at once).

@@ -16,6 +16,7 @@
 #include "cantilever.h"
 #include "options.h"
 #include "restart.h"
+#include "fe_runtime.h"
 #include "support.h"
 
 #include "dembridge/bridge/coupled.h"
@@ -431,5 +432,5 @@ int main(int argc, char** argv)
     std::cout << out.dump(2) << std::endl;
     if (!c.summary.empty())
       demo::write_summary(c.summary, out);
-  }, c.summary);
+  }, c.summary, demo::petsc_runtime());
 }

@@ -20,6 +20,7 @@
 // DIR/history.csv (tip displacement and energy budget over time).
 #include "cantilever.h"
 #include "options.h"
+#include "fe_runtime.h"
 #include "support.h"
 
 #include <CLI/CLI.hpp>
@@ -90,5 +91,5 @@ int main(int argc, char** argv)
     std::cout << result.dump(2) << std::endl;
     if (!summary.empty())
       demo::write_summary(summary, result);
-  }, summary);
+  }, summary, demo::petsc_runtime());
 }
