@@ -321,9 +321,38 @@ struct SortedElements
 {
   ElementGrid grid;
   std::vector<double> bound; ///< per item of grid.items, ascending in each cell
+  /// per element: its first node a, its axis d = b - a, d.d and its bar
+  /// radius, for surface_distance
+  std::vector<double> seg;
+
+  /// The distance from x to element e's surface: distance_to_element's
+  /// axis distance, computed in the same operations from the same values
+  /// (so the same bits), less the bar radius.
+  double surface_distance(std::int32_t e, const double* x) const
+  {
+    const double* s = &seg[8 * e];
+    const double r[3] = {x[0] - s[0], x[1] - s[1], x[2] - s[2]};
+    const double xi = std::clamp((r[0] * s[3] + r[1] * s[4] + r[2] * s[5]) / s[6], 0.0, 1.0);
+    const double q[3] = {r[0] - xi * s[3], r[1] - xi * s[4], r[2] - xi * s[5]};
+    return std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]) - s[7];
+  }
 
   SortedElements(const Bars& bars, double reach) : grid(element_grid(bars, reach))
   {
+    seg.resize(8 * bars.elements());
+    for (std::size_t e = 0; e < bars.elements(); ++e)
+    {
+      const double* pa = &bars.x[3 * bars.a[e]];
+      const double* pb = &bars.x[3 * bars.b[e]];
+      double* s = &seg[8 * e];
+      for (int k = 0; k < 3; ++k)
+      {
+        s[k] = pa[k];
+        s[3 + k] = pb[k] - pa[k];
+      }
+      s[6] = s[3] * s[3] + s[4] * s[4] + s[5] * s[5];
+      s[7] = bar_radius(bars, e);
+    }
     bound.resize(grid.items.size());
     const std::size_t cells = grid.start.size() - 1;
     // a margin below the bound: the computed distances may fall below the
@@ -368,10 +397,9 @@ Region region_without_bars(const Region& region, const Bars& bars, double rmax)
   // is at least reach - rb, past what the packing looks
   const double rb = max_bar_radius(bars), reach = 6.0 * rmax + 2.0 * rb;
   auto near = std::make_shared<const SortedElements>(bars, reach);
-  auto shared = std::make_shared<Bars>(bars);
   const double far = reach - rb; // no element within this of a cell's point it does not list
   auto base = region.sdf;
-  auto sdf = [base, near, shared, far](const Point& x)
+  auto sdf = [base, near, far](const Point& x)
   {
     // max(base, -bars_part), bars_part = min(far, min over the elements of
     // their surface's distance); an element whose bound is past both what
@@ -386,8 +414,7 @@ Region region_without_bars(const Region& region, const Bars& bars, double rmax)
       {
         if (near->bound[i] >= std::min(bars_part, -b))
           break;
-        const std::int32_t e = near->grid.items[i];
-        bars_part = std::min(bars_part, distance_to_element(*shared, e, x.data())[0] - bar_radius(*shared, e));
+        bars_part = std::min(bars_part, near->surface_distance(near->grid.items[i], x.data()));
       }
     return std::max(b, -bars_part);
   };
