@@ -11,6 +11,12 @@ seconds more, sends the signal, and checks:
 - every CSV file has whole rows only (each with the header's field count);
 - no temporary packing file of the run is left in the temporary folder.
 
+With --signal KILL the run is killed outright (no handler, no summary, its
+HDF5 files perhaps mid-write): then only its CSV files are checked, for
+whole rows, and for a first column (the time) that reaches the last frame
+of its particles.xdmf, less the rows' own spacing (rows are flushed as they
+are written, so nothing written before the kill is missing from them).
+
 With --wait-output 0 it sends the signal `delay` seconds after the start
 (for a program that writes its files only at the end).
 
@@ -31,6 +37,40 @@ import time
 import xml.etree.ElementTree as ET
 
 import h5py
+
+
+def check_csv(out_dir, problems):
+    for c in glob.glob(os.path.join(out_dir, "**", "*.csv"), recursive=True):
+        with open(c) as f:
+            text = f.read()
+        if text and not text.endswith("\n"):
+            problems.append(f"{c}: ends in the middle of a row")
+        rows = text.split("\n")
+        if rows and rows[-1] == "":
+            rows.pop()
+        if not rows:
+            continue
+        n = rows[0].count(",")
+        bad = [i for i, r in enumerate(rows) if r.count(",") != n]
+        if bad:
+            problems.append(f"{c}: rows {bad[:5]} do not have the header's {n + 1} fields")
+
+
+def check_killed(out_dir, problems):
+    """A killed run: whole CSV rows, reaching the last XDMF frame."""
+    check_csv(out_dir, problems)
+    xdmf = os.path.join(out_dir, "particles.xdmf")
+    csv = os.path.join(out_dir, "history.csv")
+    if not (os.path.exists(xdmf) and os.path.exists(csv)):
+        return
+    frames = [float(t.get("Value")) for t in ET.parse(xdmf).getroot().iter("Time")]
+    times = [float(r.split(",")[0]) for r in open(csv).read().split("\n")[1:] if r]
+    if frames and len(times) > 1:
+        spacing = max(b - a for a, b in zip(times, times[1:]))
+        if times[-1] < frames[-1] - spacing * (1 + 1e-9):
+            problems.append(f"{csv}: its last row (t = {times[-1]:.6g} s) lags the last frame of {xdmf} "
+                            f"(t = {frames[-1]:.6g} s) by more than the rows' spacing {spacing:.3g} s")
+        print(f"killed: {len(times)} rows to t = {times[-1]:.6g} s, {len(frames)} frames to t = {frames[-1]:.6g} s")
 
 
 def check_outputs(out_dir, problems):
@@ -59,17 +99,7 @@ def check_outputs(out_dir, problems):
                         f[path][()]
                 except Exception as e:  # noqa: BLE001
                     problems.append(f"{x}: names {ref}, which cannot be read: {e}")
-    for c in glob.glob(os.path.join(out_dir, "**", "*.csv"), recursive=True):
-        with open(c) as f:
-            rows = f.read().split("\n")
-        if rows and rows[-1] == "":
-            rows.pop()
-        if not rows:
-            continue
-        n = rows[0].count(",")
-        bad = [i for i, r in enumerate(rows) if r.count(",") != n]
-        if bad:
-            problems.append(f"{c}: rows {bad[:5]} do not have the header's {n + 1} fields")
+    check_csv(out_dir, problems)
 
 
 def main(argv):
@@ -111,15 +141,20 @@ def main(argv):
             p.kill()
             print("the run did not stop within 120 s of the signal")
             return 1
-        if p.returncode != 128 + sig:
-            problems.append(f"exit code {p.returncode}, expected {128 + sig}: {err[-400:]!r}")
-        try:
-            s = json.load(open(summary))
-            if s.get("completed") is not False or not s.get("time_reached_s", 0) > 0:
-                problems.append(f"summary: {s}")
-        except (OSError, ValueError) as e:
-            problems.append(f"summary {summary}: {e}")
-        check_outputs(out_dir, problems)
+        if sig == signal.SIGKILL:
+            if p.returncode != -signal.SIGKILL:
+                problems.append(f"exit code {p.returncode}, expected -9 (killed): {err[-400:]!r}")
+            check_killed(out_dir, problems)
+        else:
+            if p.returncode != 128 + sig:
+                problems.append(f"exit code {p.returncode}, expected {128 + sig}: {err[-400:]!r}")
+            try:
+                s = json.load(open(summary))
+                if s.get("completed") is not False or not s.get("time_reached_s", 0) > 0:
+                    problems.append(f"summary: {s}")
+            except (OSError, ValueError) as e:
+                problems.append(f"summary {summary}: {e}")
+            check_outputs(out_dir, problems)
         left = glob.glob(os.path.join(tempfile.gettempdir(), f"dembridge_*_{p.pid}_*"))
         if left:
             problems.append(f"temporary files left: {left}")

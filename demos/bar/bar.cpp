@@ -284,12 +284,19 @@ private:
     po.radius_ratio = _c.radius_ratio;
     po.seed = _c.seed;
     const auto region = dem::box_region({_de_from, 0.0, -0.5 * h}, {_c.length, _c.width, 0.5 * h});
-    const auto pk = dem::generate_packing(region, po);
+    // the dem module's errors name the region; the user's options are these
+    std::ostringstream mean_radius;
+    mean_radius << _c.mean_radius;
+    const std::string opts = "--mean-radius " + mean_radius.str() + " m in the DE part of the bar (--length, "
+                             "--width, --overlap-start)";
+    const auto pk = with_context(opts, [&] { return dem::generate_packing(region, po); });
     double solid = 0.0;
     for (double r : pk.r)
       solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
     _p = dem::make_particles(pk.x, pk.r, _mat.density, solid / region.volume);
-    _links = dem::create_links(_p, dem::lambda_for_bulk_links(region, _p.x, _p.r, _mf.links_per_sphere), _mat);
+    _links = dem::create_links(
+        _p, with_context(opts, [&] { return dem::lambda_for_bulk_links(region, _p.x, _p.r, _mf.links_per_sphere); }),
+        _mat);
     _floppy = dem::floppy_spheres(_p, _links).size();
     if (_c.skin_compensation)
     {

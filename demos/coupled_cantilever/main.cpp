@@ -35,6 +35,7 @@
 #include <numbers>
 #include <memory>
 #include <numeric>
+#include <sstream>
 
 namespace
 {
@@ -129,12 +130,20 @@ private:
     po.seed = _c.seed;
     const double h = _c.width;
     const auto region = dem::box_region({_c.de_start, 0.0, -0.5 * h}, {_c.length, _c.width, 0.5 * h});
-    const auto pk = dem::generate_packing(region, po);
+    // the dem module's errors name the region; the user's options are these
+    std::ostringstream mean_radius;
+    mean_radius << _c.mean_radius;
+    const std::string opts = "--mean-radius " + mean_radius.str() + " m in the DE part (--length, "
+                             "--width, --de-start)";
+    const auto pk = demo::with_context(opts, [&] { return dem::generate_packing(region, po); });
     double solid_volume = 0.0;
     for (double r : pk.r)
       solid_volume += 4.0 / 3.0 * std::numbers::pi * r * r * r;
     _p = dem::make_particles(pk.x, pk.r, _mat.density, solid_volume / region.volume);
-    _links = dem::create_links(_p, dem::lambda_for_bulk_links(region, _p.x, _p.r, _mf.links_per_sphere), _mat);
+    _links = dem::create_links(
+        _p,
+        demo::with_context(opts, [&] { return dem::lambda_for_bulk_links(region, _p.x, _p.r, _mf.links_per_sphere); }),
+        _mat);
     _floppy = dem::floppy_spheres(_p, _links);
     if (!_floppy.empty())
       std::cout << "# " << _floppy.size() << " spheres have their links on one line (dem::floppy_spheres): "

@@ -14,6 +14,7 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <sstream>
 #include <stdexcept>
 
 namespace dembridge::demo
@@ -178,10 +179,17 @@ private:
     po.mean_radius = _c.mean_radius;
     po.radius_ratio = _c.radius_ratio;
     po.seed = _c.seed;
-    const ConcretePacking c = pack_around_bars(region, _bars, po); // docs/method.md 1.15
+    // the dem module's errors name the region; the user's options are these
+    std::ostringstream mean_radius;
+    mean_radius << _c.mean_radius;
+    const std::string opts = "--mean-radius " + mean_radius.str() + " m in the beam (--height, --width, "
+                             "--span, --overhang)";
+    const ConcretePacking c = with_context(opts, [&] { return pack_around_bars(region, _bars, po); }); // method.md 1.15
     _rmax = *std::max_element(c.packing.r.begin(), c.packing.r.end());
     _p = make_particles(c.packing.x, c.packing.r, _c.material.density, c.solid_fraction);
-    _links = create_links(_p, lambda_for_bulk_links(region, _p.x, _p.r, _c.links_per_sphere), _c.material);
+    _links = create_links(
+        _p, with_context(opts, [&] { return lambda_for_bulk_links(region, _p.x, _p.r, _c.links_per_sphere); }),
+        _c.material);
     if (_c.skin_compensation)
       // the faces' skin, two Rmax deep, stiffened to the bulk's links per
       // sphere: bending weighs the soft skin by z^2 (docs/method.md 1.13)
