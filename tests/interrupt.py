@@ -62,10 +62,14 @@ def check_killed(out_dir, problems):
     xdmf = os.path.join(out_dir, "particles.xdmf")
     csv = os.path.join(out_dir, "history.csv")
     if not (os.path.exists(xdmf) and os.path.exists(csv)):
+        problems.append(f"killed before it wrote {csv} and {xdmf}: nothing checked (give a longer --delay)")
         return
     frames = [float(t.get("Value")) for t in ET.parse(xdmf).getroot().iter("Time")]
     times = [float(r.split(",")[0]) for r in open(csv).read().split("\n")[1:] if r]
-    if frames and len(times) > 1:
+    if not frames or len(times) < 2:
+        problems.append(f"killed after {len(frames)} frames and {len(times)} rows: too early to check "
+                        "(give a longer --delay)")
+    else:
         spacing = max(b - a for a, b in zip(times, times[1:]))
         if times[-1] < frames[-1] - spacing * (1 + 1e-9):
             problems.append(f"{csv}: its last row (t = {times[-1]:.6g} s) lags the last frame of {xdmf} "

@@ -20,21 +20,6 @@ class App;
 namespace dembridge::demo
 {
 
-/// Runs `f`; a std::exception it throws is thrown again as a
-/// std::runtime_error "context: what" (a library's message given the
-/// user's option or key that caused it).
-template <class F>
-auto with_context(const std::string& context, F&& f) -> decltype(f())
-{
-  try
-  {
-    return f();
-  }
-  catch (const std::exception& e)
-  {
-    throw std::runtime_error(context + ": " + e.what());
-  }
-}
 
 /// What a program starts before its body and stops after it: PETSc (and
 /// MPI) for the programs with finite elements (fe_runtime.h), nothing for
@@ -67,6 +52,26 @@ struct Interrupted : std::runtime_error
   int signal;  ///< SIGINT or SIGTERM
 };
 
+/// Runs `f`; a std::runtime_error it throws (but Interrupted) is thrown
+/// again as a std::runtime_error "context: what" (a library's message given the
+/// user's option or key that caused it).
+template <class F>
+auto with_context(const std::string& context, F&& f) -> decltype(f())
+{
+  try
+  {
+    return f();
+  }
+  catch (const Interrupted&)
+  {
+    throw; // a stop, not an error of the input
+  }
+  catch (const std::runtime_error& e)
+  {
+    throw std::runtime_error(context + ": " + e.what());
+  }
+}
+
 /// Called at the end of every step of a time loop, with the time reached
 /// [s]: @throws Interrupted if a stop was requested. Files close on the way
 /// out (their writers' destructors), so what was written stays readable.
@@ -79,10 +84,10 @@ void note_checkpoint(const std::filesystem::path& file);
 /// Writes a run's summary with "completed": true.
 void write_summary(const std::filesystem::path& file, nlohmann::json j);
 
-/// Writes `j` as indented JSON to `file` (creating its folder).
 /// Writes `text` to `file` (its folder made). @throws naming the file if a
 /// write fails (a full disk).
 void write_text(const std::filesystem::path& file, const std::string& text);
+/// Writes `j` as indented JSON to `file` (write_text).
 void write_json(const std::filesystem::path& file, const nlohmann::json& j);
 
 /// Prints every option of `app` with its resolved value (the run's header):

@@ -545,26 +545,32 @@ Scenario read_sections(Reader& r, const std::filesystem::path& file)
   return s;
 }
 
-/// The projectile must strike the slab's face whole: its path (through
-/// projectile.aim_m) meets the face at least the projectile's radius from
-/// each edge. A path beside the slab, or one grazing its edge, would give no
-/// impact, or one on an edge that the slab's supports and size do not model.
+/// The projectile must strike the slab's face whole: its footprint on the
+/// struck face (its cross-section cut by the face: the radius r across the
+/// plane of obliquity, r / cos(obliquity) along x) lies at least that far
+/// from each edge of the face around projectile.aim_m. A path beside the
+/// slab, or one grazing its edge, would give no impact, or one on an edge
+/// that the slab's supports and size do not model. (Where an oblique path
+/// would leave a thick slab is not checked: a block may stop it first.)
 void check_path(const Scenario& s)
 {
   const TargetSpec& t = s.target;
   const ProjectileSpec& q = s.projectile;
   const std::string at = "scenario " + s.file.string() + ": ";
-  const double r = 0.5 * q.diameter, ax = 0.5 * t.size[0] - r, ay = 0.5 * t.size[1] - r;
+  const double r = 0.5 * q.diameter, rx = r / std::cos(q.obliquity_deg * std::numbers::pi / 180.0);
+  const double ax = 0.5 * t.size[0] - rx, ay = 0.5 * t.size[1] - r;
   if (ax <= 0.0 || ay <= 0.0)
-    throw std::runtime_error(at + "projectile.diameter_m = " + number_text(q.diameter) + ": the projectile is not "
-                             "narrower than the slab (target.size_m = [" + number_text(t.size[0]) + ", "
-                             + number_text(t.size[1]) + "] m): give a wider slab or a narrower projectile");
+    throw std::runtime_error(at + "projectile.diameter_m = " + number_text(q.diameter) + ": the projectile (its "
+                             "footprint on the face " + number_text(2.0 * rx) + " x " + number_text(q.diameter)
+                             + " m at obliquity_deg " + number_text(q.obliquity_deg) + ") is not narrower than the "
+                             "slab (target.size_m = [" + number_text(t.size[0]) + ", " + number_text(t.size[1])
+                             + "] m): give a wider slab or a narrower projectile");
   if (std::abs(q.aim[0]) > ax || std::abs(q.aim[1]) > ay)
     throw std::runtime_error(at + "projectile.aim_m = [" + number_text(q.aim[0]) + ", " + number_text(q.aim[1])
                              + "]: the projectile (diameter " + number_text(q.diameter) + " m) would miss the slab "
                              "or graze its edge: allowed |x| <= " + number_text(ax) + " m and |y| <= "
                              + number_text(ay) + " m (the slab's half sizes, target.size_m / 2, less the "
-                             "projectile's radius)");
+                             "projectile's footprint: its radius, over cos(obliquity_deg) along x)");
 }
 
 } // namespace
