@@ -13,10 +13,11 @@ flags="-O1 -g1 -fsanitize=address,undefined -fno-omit-frame-pointer"
 # leaks off: MPI and PETSc keep allocations until exit by design
 export ASAN_OPTIONS=detect_leaks=0:halt_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+# no link-time optimisation: its code generation runs on one core at the link
 [ -f build-asan/CMakeCache.txt ] || cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=None \
   -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_C_FLAGS="$flags" \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
-  -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined"
+  -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" -DDEMBRIDGE_IPO=OFF
 cmake --build build-asan -j"$(nproc)" --target unit_tests dem_tests
 export OMP_NUM_THREADS=1
 ./build-asan/bin/unit_tests "~[long]" > build-asan/unit_tests.log 2>&1 &

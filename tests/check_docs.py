@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""Checks that the commands README.md and docs/*.md show still exist.
+"""Checks that the commands README.md, docs/*.md, docs/studies/*.md and
+tests/README.md show still exist.
 
 Every line of a ```sh block, and every inline `build/bin/...` span, is a
 command. Its program must exist: `build/bin/NAME` an executable of the build
@@ -78,7 +79,8 @@ def main(argv):
     if len(argv) != 2:
         raise SystemExit(__doc__)
     src, bin_dir = Path(argv[0]), Path(argv[1])
-    pages = [src / "README.md"] + sorted((src / "docs").glob("*.md"))
+    pages = ([src / "README.md"] + sorted((src / "docs").glob("*.md"))
+             + sorted((src / "docs" / "studies").glob("*.md")) + [src / "tests" / "README.md"])
     problems, n = [], 0
     for md in pages:
         for no, cmd in commands(md):

@@ -1,3 +1,7 @@
 // Catch2 main for the DEM tests (no MPI/PETSc: dem/ knows nothing of DOLFINx).
-#define CATCH_CONFIG_MAIN
-#include <catch2/catch.hpp>
+#include "catch_runner.h"
+
+int main(int argc, char* argv[])
+{
+  return dembridge::tests::run_catch(argc, argv);
+}

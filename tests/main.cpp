@@ -1,6 +1,6 @@
 // Catch2 test main: initialises MPI/PETSc once for every test.
-#define CATCH_CONFIG_RUNNER
-#include <catch2/catch.hpp>
+#include "catch_runner.h"
+
 #include <dolfinx/common/log.h>
 #include <petscsys.h>
 
@@ -8,7 +8,7 @@ int main(int argc, char* argv[])
 {
   PetscInitializeNoArguments();
   loguru::g_stderr_verbosity = loguru::Verbosity_WARNING;
-  const int result = Catch::Session().run(argc, argv);
+  const int result = dembridge::tests::run_catch(argc, argv);
   PetscFinalize();
   return result;
 }

@@ -187,7 +187,7 @@ TEST_CASE("critical time steps by power iteration: stable below, unstable above"
     for (double factor : {0.97, 1.05})
     {
       auto b = make_bar(shell::Cell::quadrilateral);
-      const double dt_c = bridge::particle_critical_time_step(b.p, b.l);
+      const double dt_c = dem::particle_critical_time_step(b.p, b.l);
       // the Gershgorin bound is on the safe side of it
       CHECK(dem::critical_time_step(b.p, b.l) <= dt_c);
       random_velocities(b.p);
@@ -226,7 +226,7 @@ TEST_CASE("energy guards: unstable DE and coupled runs stop on their energy, bef
   // own check stops the run.)
   {
     auto b = make_bar(shell::Cell::quadrilateral);
-    const double dt_c = bridge::particle_critical_time_step(b.p, b.l);
+    const double dt_c = dem::particle_critical_time_step(b.p, b.l);
     random_velocities(b.p);
     dem::DemSolver s(b.p, b.l, b.mat, 1.01 * dt_c, 0.0, 0.5e-3);
     s.start();

@@ -113,7 +113,7 @@ TEST_CASE("power iteration: largest eigenvalue of a spring chain", "[explicit]")
   const double exact = 4.0 * k / m
                        * std::pow(std::sin((2.0 * n - 1.0) * std::numbers::pi / (2.0 * (2 * n + 1))), 2);
   std::vector<double> mass(n, m);
-  const double l = max_eigenvalue(mass, chain(k), 1e-10, 100000);
+  const double l = dembridge::core::max_eigenvalue(mass, chain(k), 1e-10, 100000);
   // The Rayleigh quotient approaches lambda_max from below; the top two
   // eigenvalues of the chain are close, so allow 1e-3.
   CHECK(l <= exact * (1 + 1e-12));

@@ -99,7 +99,7 @@ void CoupledSolver::own_critical_steps()
 {
   _model.set_weight(std::vector<double>(_model.num_nodes(), 1.0));
   _dt_fe = _model.critical_time_step(_model.lumped_mass());
-  _dt_de = particle_critical_time_step(_p, _l);
+  _dt_de = dem::particle_critical_time_step(_p, _l);
 }
 
 void CoupledSolver::weigh_fe(const CouplingOptions& o)
@@ -198,7 +198,7 @@ void CoupledSolver::coupled_time_step(const CouplingOptions& o)
       for (int d = 0; d < 3; ++d)
         z[nf + 3 * _ids[q] + d] = _v_de[3 * q + d];
   };
-  _dt_coupled = 2.0 / std::sqrt(shell::max_eigenvalue(mass, f_all, 1e-6, 20000, project));
+  _dt_coupled = 2.0 / std::sqrt(core::max_eigenvalue(mass, f_all, 1e-6, 20000, project));
   if (o.dt > _dt_coupled)
   {
     std::ostringstream s;
@@ -208,23 +208,6 @@ void CoupledSolver::coupled_time_step(const CouplingOptions& o)
     throw std::runtime_error(s.str());
   }
   _dt = o.dt > 0.0 ? o.dt : o.safety * _dt_coupled;
-}
-
-double particle_critical_time_step(const dem::Particles& p, const dem::Links& l, double rtol)
-{
-  const std::size_t n = p.size();
-  std::vector<double> mass(6 * n);
-  for (std::size_t i = 0; i < n; ++i)
-    for (int d = 0; d < 3; ++d)
-    {
-      mass[3 * i + d] = p.m[i];
-      mass[3 * n + 3 * i + d] = p.inertia[i];
-    }
-  auto f = [&](std::span<const double> z, std::span<double> out) { dem::stiffness_action(p, l, z, out); };
-  const double lmax = shell::max_eigenvalue(mass, f, rtol, 20000);
-  if (!(lmax > 0.0))
-    throw std::runtime_error("critical time step: the assembly has no intact link");
-  return 2.0 / std::sqrt(lmax);
 }
 
 void CoupledSolver::correct(bool half_step, bool residual)

@@ -4,6 +4,7 @@
 
 #include "dembridge/dem/bars.h"
 #include "dembridge/dem/body.h"
+#include "dembridge/core/stepping.h"
 
 #include <algorithm>
 #include <cmath>
@@ -166,6 +167,23 @@ double critical_time_step(const Particles& p, const Links& l, const Material& m,
   const double spheres = step_from_rows(rt, rr);
   const double lmax = nodes.empty() ? 0.0 : *std::max_element(nodes.begin(), nodes.end());
   return lmax > 0.0 ? std::min(spheres, 2.0 / std::sqrt(lmax)) : spheres;
+}
+
+double particle_critical_time_step(const Particles& p, const Links& l, double rtol)
+{
+  const std::size_t n = p.size();
+  std::vector<double> mass(6 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d)
+    {
+      mass[3 * i + d] = p.m[i];
+      mass[3 * n + 3 * i + d] = p.inertia[i];
+    }
+  auto f = [&](std::span<const double> z, std::span<double> out) { stiffness_action(p, l, z, out); };
+  const double lmax = core::max_eigenvalue(mass, f, rtol, 20000);
+  if (!(lmax > 0.0))
+    throw std::runtime_error("critical time step: the assembly has no intact link");
+  return 2.0 / std::sqrt(lmax);
 }
 
 } // namespace dembridge::dem

@@ -1,5 +1,6 @@
 #include "bar.h"
 #include "support.h"
+#include "time_loop.h"
 
 #include "dembridge/bridge/coupled.h"
 #include "dembridge/dem/material_file.h"
@@ -335,7 +336,7 @@ private:
     }
     else
     {
-      const double dtc = bridge::particle_critical_time_step(_p, _links);
+      const double dtc = dem::particle_critical_time_step(_p, _links);
       _dt = _c.safety * dtc;
       _de_alone = std::make_unique<dem::DemSolver>(_p, _links, _mat, _dt, _damping, 0.5 * _c.mean_radius);
       _des = _de_alone.get();
@@ -538,7 +539,17 @@ private:
       _released = !_dynamic;
       write_frame(0.0);
     }
-    for (std::int64_t k = steps_done() + 1; k <= nsteps; ++k)
+    // the shared time loop (time_loop.h): up to 2000 CSV rows, the frames,
+    // 10 progress lines, each also at the end
+    const LoopPlan plan{.done = steps_done(),
+                        .last = nsteps,
+                        .rows = {std::max<std::int64_t>(1, nsteps / 2000)},
+                        .frames = {every},
+                        .prints = {std::max<std::int64_t>(1, nsteps / 10)},
+                        .checkpoints = _ckpt.get()};
+    double t = 0.0, v0 = 0.0, v1 = 0.0; // the step's time [s] and probe values [m]
+    LoopHooks h;
+    h.step = [&](std::int64_t k)
     {
       if (_coupled)
         _coupled->step(k % every == 0 || k == nsteps); // observed where frames are written
@@ -550,29 +561,35 @@ private:
       }
       else
         _des->step();
-      const double t = k * _dt;
+      t = k * _dt;
+    };
+    h.time = [&] { return t; };
+    h.after_step = [&](std::int64_t)
+    {
       if (!_released && t >= _ramp)
         release();
-      const double v0 = probe_value(0), v1 = probe_value(1);
+      v0 = probe_value(0);
+      v1 = probe_value(1);
       if (_dynamic && _released)
       {
         _t_after.push_back(t);
         _after[0].push_back(v0);
         _after[1].push_back(v1);
       }
-      if (_csv.is_open() && (k % std::max<std::int64_t>(1, nsteps / 2000) == 0 || k == nsteps))
-        _csv << t << ',' << v0 << ',' << v1 << ',' << end_value() << '\n' << std::flush; // whole rows if killed
-      if (k % every == 0 || k == nsteps)
-        write_frame(t);
-      if (!_c.quiet && (k % std::max<std::int64_t>(1, nsteps / 10) == 0 || k == nsteps))
+    };
+    if (_csv.is_open())
+      h.row = [&](std::int64_t, bool)
+      { _csv << t << ',' << v0 << ',' << v1 << ',' << end_value() << '\n' << std::flush; }; // whole rows if killed
+    h.frame = [&](std::int64_t, bool) { write_frame(t); };
+    if (!_c.quiet)
+      h.progress = [&](std::int64_t k, bool)
+      {
         std::printf("  t %.4e s  step %lld/%lld  probe 0.75: %.4e m  probe %.4g: %.4e m  end %.4e m  (%.1f s)\n", t,
-                    static_cast<long long>(k), static_cast<long long>(nsteps), v0, _probes[1].x, v1,
-                    end_value(), _clock.seconds());
-      if (_ckpt)
-        _ckpt->end_of_step(k, t, [this](const checkpoint::Group& g) { save(g); });
-      else
-        check_stop(t);
-    }
+                    static_cast<long long>(k), static_cast<long long>(nsteps), v0, _probes[1].x, v1, end_value(),
+                    _clock.seconds());
+      };
+    h.save = [this](const checkpoint::Group& g) { save(g); };
+    run_time_loop(plan, h);
   }
 
   // ---- summary --------------------------------------------------------------

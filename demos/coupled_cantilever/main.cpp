@@ -18,6 +18,7 @@
 #include "restart.h"
 #include "fe_runtime.h"
 #include "support.h"
+#include "time_loop.h"
 
 #include "dembridge/bridge/coupled.h"
 #include "dembridge/dem/material_file.h"
@@ -337,16 +338,23 @@ private:
       _e0 = _s->energy().total();
       write_frame(0, 0.0); // the initial state, a frame at t = 0
     }
-    for (std::int64_t k = _s->fe().steps() + 1; k <= _nsteps; ++k)
+    // the shared time loop (time_loop.h): a frame and a CSV row every
+    // _every steps and at the end
+    const demo::LoopPlan plan{
+        .done = _s->fe().steps(), .last = _nsteps, .frames = {_every}, .checkpoints = _ckpt.get()};
+    double r = 0.0; // the step's multiplier residual [m/s]
+    demo::LoopHooks h;
+    h.step = [&](std::int64_t k)
     {
-      const double r = _s->step();
+      r = _s->step();
       _worst = std::max(_worst, r);
       _ts.push_back(k * _s->dt());
       _tips.push_back(tip_value());
-      if (k % _every == 0 || k == _nsteps)
-        write_frame(k, r);
-      _ckpt->end_of_step(k, _ts.back(), [this](const checkpoint::Group& g) { save(g); });
-    }
+    };
+    h.time = [this] { return _ts.back(); };
+    h.frame = [&](std::int64_t k, bool) { write_frame(k, r); };
+    h.save = [this](const checkpoint::Group& g) { save(g); };
+    demo::run_time_loop(plan, h);
   }
 
   // ---- summary --------------------------------------------------------------

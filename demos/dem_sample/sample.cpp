@@ -1,5 +1,6 @@
 #include "sample.h"
 #include "support.h"
+#include "time_loop.h"
 
 #include "dembridge/dem/output.h"
 #include "dembridge/dem/packing.h"
@@ -553,16 +554,18 @@ private:
     const std::int64_t sample_every = std::max<std::int64_t>(1, nsteps / 2000);
     const std::int64_t frame_every = std::max<std::int64_t>(1, nsteps / std::max(1, _cfg.frames));
     const std::int64_t print_every = std::max<std::int64_t>(1, nsteps / 20);
-    for (std::int64_t s = _solver->steps() + 1; s <= nsteps && !_after_peak; ++s)
+    // the shared time loop (time_loop.h); the measurement points drive the
+    // end condition (past the peak) and write the rows and frames
+    const LoopPlan plan{.done = _solver->steps(), .last = nsteps, .checkpoints = _ckpt.get()};
+    LoopHooks h = solver_hooks(*_solver);
+    h.after_step = [&](std::int64_t s)
     {
-      _solver->step();
       if (s % sample_every == 0 || s % frame_every == 0)
         measure(s % print_every == 0, s % frame_every == 0);
-      if (_ckpt)
-        _ckpt->end_of_step(s, _solver->time(), [this](const checkpoint::Group& g) { save(g); });
-      else
-        check_stop(_solver->time());
-    }
+    };
+    h.finished = [this](std::int64_t) { return _after_peak; };
+    h.save = [this](const checkpoint::Group& g) { save(g); };
+    run_time_loop(plan, h);
     measure(true, true);
     if (_writer)
       _writer->close();

@@ -1,5 +1,6 @@
 #include "impact.h"
 #include "support.h"
+#include "time_loop.h"
 
 #include "dembridge/dem/output.h"
 #include "dembridge/dem/packing.h"
@@ -557,55 +558,43 @@ private:
     return Outcome::running;
   }
 
+  /// The shared time loop (time_loop.h): the outcome is its end condition;
+  /// history rows every _history_every steps, frames every crossing /
+  /// frames, progress every 2 s, each also at the last step.
   void loop()
   {
     const std::int64_t frame_every = std::max<std::int64_t>(1, _crossing_steps / _s.run.frames);
-    Stopwatch clock;
-    double last_print = -1e9;
-    _outcome = outcome();
-    while (_outcome == Outcome::running)
+    const LoopPlan plan{.done = _solver->steps(),
+                        .last = _nsteps,
+                        .rows = {_history_every},
+                        .frames = {frame_every},
+                        .prints = {}, // at the end, and by the clock
+                        .print_seconds = 2.0,
+                        .checkpoints = _ckpt.get()};
+    LoopHooks h = solver_hooks(*_solver);
+    h.finished = [this](std::int64_t)
     {
-      if (_solver->steps() >= _nsteps)
-      {
-        _outcome = Outcome::time_up;
-        break;
-      }
-      _solver->step();
-      const std::int64_t s = _solver->steps();
       _outcome = outcome();
-      if (s % _history_every == 0)
-        write_row();
-      if (_writer && s >= (_next_frame + 1) * frame_every)
+      return _outcome != Outcome::running;
+    };
+    h.row = [this](std::int64_t, bool) { write_row(); };
+    if (_writer)
+      h.frame = [this, frame_every](std::int64_t k, bool)
       {
         write_frame();
-        ++_next_frame;
-      }
-      if (!_cfg.quiet && clock.seconds() - last_print > 2.0)
-      {
-        progress();
-        last_print = clock.seconds();
-      }
-      if (_outcome != Outcome::running)
-        break;
-      if (_ckpt)
-        _ckpt->end_of_step(s, _solver->time(), [this](const checkpoint::Group& g) { save(g); });
-      else
-        check_stop(_solver->time());
-    }
-    if (_solver->steps() % _history_every != 0)
-      write_row();
+        _next_frame = k / frame_every; // frames fall on its multiples, and at the end
+      };
+    if (!_cfg.quiet)
+      h.progress = [this](std::int64_t, bool) { progress(); };
+    h.save = [this](const checkpoint::Group& g) { save(g); };
+    if (!run_time_loop(plan, h).finished)
+      _outcome = Outcome::time_up;
     if (_writer)
     {
-      // (frames fall on the steps _next_frame x frame_every, the first at
-      // step 0: the last step's frame, if it had one, is not written twice)
-      if (_solver->steps() != _next_frame * frame_every)
-        write_frame();
       _writer->close();
       if (_bar_writer)
         _bar_writer->close();
     }
-    if (!_cfg.quiet)
-      progress();
   }
 
   // ---- measurements ---------------------------------------------------------

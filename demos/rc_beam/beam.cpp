@@ -1,5 +1,6 @@
 #include "beam.h"
 #include "support.h"
+#include "time_loop.h"
 
 #include "dembridge/dem/output.h"
 #include "dembridge/dem/packing.h"
@@ -486,63 +487,68 @@ private:
     const double t_end = _ramp / 2.0 + _target / _c.speed;
     const auto steps = static_cast<std::int64_t>(t_end / _dt);
     const std::int64_t every = std::max<std::int64_t>(1, steps / 1000), frame = std::max<std::int64_t>(1, steps / _c.frames);
-    Stopwatch clock;
-    double last = -1e9;
     // the load recorded is the plate's reaction averaged over the steps
     // since the last sample, as a load cell averages: sampled once in a
     // while, the reaction would alias the spheres' own vibration under
     // the plate (some 5-15 % of the load while the concrete cracks)
     double load_sum = 0.0, left_sum = 0.0, right_sum = 0.0; // and the supports' upward reactions
     std::int64_t load_steps = 0;
-    while (deflection() < _target && _solver->steps() < 2 * steps)
+    // the shared time loop (time_loop.h): to the target deflection (at most
+    // twice the steps it takes at the plate's speed); a sample every
+    // `every` steps, progress every 2 s; the last frame after the loop
+    const LoopPlan plan{.done = _solver->steps(),
+                        .last = 2 * steps,
+                        .rows = {every, false},
+                        .frames = {frame, false},
+                        .prints = {0, false},
+                        .print_seconds = 2.0};
+    LoopHooks h = solver_hooks(*_solver);
+    h.after_step = [&](std::int64_t)
     {
-      _solver->step();
       load_sum += load();
       left_sum += _solver->reaction("left")[2];
       right_sum += _solver->reaction("right")[2];
       ++load_steps;
-      const std::int64_t s = _solver->steps();
-      if (pw && s % frame == 0)
+    };
+    h.finished = [this](std::int64_t) { return deflection() >= _target; };
+    if (pw)
+      h.frame = [&](std::int64_t, bool)
       {
         pw->write(_solver->time(), _p, _links);
         bw->write(_solver->time(), _solver->bars());
-      }
-      check_stop(_solver->time());
-      if (s % every != 0 && (_c.quiet || clock.seconds() - last <= 2.0))
-        continue;
-      const double stress = bar_stress();
-      if (s % every == 0)
-      {
-        // first yield is read at the samples only, with the interval's
-        // mean load, so that it does not depend on the progress prints
-        const double mean_load = load_sum / static_cast<double>(load_steps);
-        if (_p_yield_model == 0.0 && yielded())
-          first_yield(mean_load, left_sum / static_cast<double>(load_steps),
-                      right_sum / static_cast<double>(load_steps));
-        _times.push_back(_solver->time());
-        _delta.push_back(deflection());
-        _load.push_back(mean_load);
-        _supports.push_back((left_sum + right_sum) / static_cast<double>(load_steps));
-        if (_strip_joined && _cut_sample < 0)
-          if (const auto [cut, x] = cover_cut(); cut)
-          {
-            _cut_sample = static_cast<std::int64_t>(_load.size()) - 1;
-            _cut_x = x;
-          }
-        load_sum = left_sum = right_sum = 0.0;
-        load_steps = 0;
-        if (csv.is_open())
-          csv << std::setprecision(10) << _solver->time() << "," << _delta.back() << "," << _load.back() << ","
-              << broken() << "," << stress << "\n" << std::flush; // whole rows if the run is killed
-      }
-      if (!_c.quiet && clock.seconds() - last > 2.0)
+      };
+    h.row = [&](std::int64_t, bool)
+    {
+      // first yield is read at the samples only, with the interval's
+      // mean load, so that it does not depend on the progress prints
+      const double mean_load = load_sum / static_cast<double>(load_steps);
+      if (_p_yield_model == 0.0 && yielded())
+        first_yield(mean_load, left_sum / static_cast<double>(load_steps),
+                    right_sum / static_cast<double>(load_steps));
+      _times.push_back(_solver->time());
+      _delta.push_back(deflection());
+      _load.push_back(mean_load);
+      _supports.push_back((left_sum + right_sum) / static_cast<double>(load_steps));
+      if (_strip_joined && _cut_sample < 0)
+        if (const auto [cut, x] = cover_cut(); cut)
+        {
+          _cut_sample = static_cast<std::int64_t>(_load.size()) - 1;
+          _cut_x = x;
+        }
+      load_sum = left_sum = right_sum = 0.0;
+      load_steps = 0;
+      if (csv.is_open())
+        csv << std::setprecision(10) << _solver->time() << "," << _delta.back() << "," << _load.back() << ","
+            << broken() << "," << bar_stress() << "\n" << std::flush; // whole rows if the run is killed
+    };
+    if (!_c.quiet)
+      h.progress = [&](std::int64_t, bool)
       {
         std::cout << std::setw(14) << _solver->time() << std::setw(16) << deflection() << std::setw(10)
-                  << (_load.empty() ? load() : _load.back())
-                  << std::setw(14) << broken() << std::setw(21) << stress << std::endl;
-        last = clock.seconds();
-      }
-    }
+                  << (_load.empty() ? load() : _load.back()) << std::setw(14) << broken() << std::setw(21)
+                  << bar_stress() << std::endl;
+      };
+    run_time_loop(plan, h);
     if (pw)
     {
       pw->write(_solver->time(), _p, _links);

@@ -1,5 +1,6 @@
 #include "cantilever.h"
 #include "support.h"
+#include "time_loop.h"
 
 #include "dembridge/shell/analytic.h"
 #include "dembridge/shell/explicit.h"
@@ -400,35 +401,35 @@ private:
     }
     const double E0 = _E0;
     const std::int64_t print_every = std::max<std::int64_t>(1, nsteps / 10);
-    for (std::int64_t s = _solver->steps() + 1; s <= nsteps; ++s)
+    // the shared time loop (time_loop.h); the energies are sampled every
+    // 10 steps and at each frame
+    const LoopPlan plan{.done = _solver->steps(), .last = nsteps, .checkpoints = _ckpt.get()};
+    LoopHooks h = solver_hooks(*_solver);
+    h.after_step = [&](std::int64_t s)
     {
-      _solver->step();
       _ts.push_back(_solver->time());
       _tipv.push_back(tip_value(_solver->u()));
       const bool frame = s % every == 0 || s == nsteps;
-      if (s % 10 == 0 || frame)
+      if (s % 10 != 0 && !frame)
+        return;
+      const auto e = _solver->energy();
+      const double tot = e.kinetic + e.strain;
+      _emax = std::max({_emax, tot, e.external_work});
+      if (_damping == 0.0 && _cfg.load != "static-tip" && E0 > 0.0)
+        _drift = std::max(_drift, std::abs(tot - E0) / E0);
+      _imbalance = std::max(_imbalance, std::abs(e.imbalance()));
+      if (frame)
       {
-        const auto e = _solver->energy();
-        const double tot = e.kinetic + e.strain;
-        _emax = std::max({_emax, tot, e.external_work});
-        if (_damping == 0.0 && _cfg.load != "static-tip" && E0 > 0.0)
-          _drift = std::max(_drift, std::abs(tot - E0) / E0);
-        _imbalance = std::max(_imbalance, std::abs(e.imbalance()));
-        if (frame)
+        if (_writer)
         {
-          if (_writer)
-          {
-            _writer->write(_solver->time(), _solver->u(), _solver->v());
-            ++_frames_written;
-          }
-          write_energy(e, s % print_every == 0 || s == nsteps);
+          _writer->write(_solver->time(), _solver->u(), _solver->v());
+          ++_frames_written;
         }
+        write_energy(e, s % print_every == 0 || s == nsteps);
       }
-      if (_ckpt)
-        _ckpt->end_of_step(s, _solver->time(), [this](const checkpoint::Group& g) { save(g); });
-      else
-        check_stop(_solver->time());
-    }
+    };
+    h.save = [this](const checkpoint::Group& g) { save(g); };
+    run_time_loop(plan, h);
     if (_writer)
       _writer->close();
   }

@@ -517,7 +517,7 @@ double FEModel::critical_time_step(std::span<const double> mass) const
 {
   if (mass.size() != num_dofs())
     throw std::runtime_error("critical_time_step: mass size differs from the dofs");
-  const double lmax = max_eigenvalue(mass, internal_force_fn());
+  const double lmax = core::max_eigenvalue(mass, internal_force_fn());
   return 2.0 / std::sqrt(lmax);
 }
 

@@ -64,14 +64,6 @@ struct CoupledTimings
   double multipliers = 0.0; ///< the two multiplier corrections per step
 };
 
-/// Critical time step of a DE assembly alone [s]: 2 / sqrt(lambda_max) of
-/// its linearised link stiffness (translations and rotations, link weights
-/// included) over its masses and inertias, by power iteration (relative
-/// tolerance rtol on lambda). Sharper than dem::critical_time_step, the
-/// Gershgorin bound, which is on the safe side.
-double particle_critical_time_step(const dem::Particles& p, const dem::Links& l,
-                                   double rtol = 1e-6);
-
 class CoupledSolver
 {
 public:

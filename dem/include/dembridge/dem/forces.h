@@ -90,5 +90,13 @@ double critical_time_step(const Particles& p, const Links& l, const Material& m)
 /// The same with the bars' elements and bonds (bars.h: add_bar_rows): the
 /// step for a reinforced run, the bar nodes' rows included.
 double critical_time_step(const Particles& p, const Links& l, const Material& m, const Bars& bars);
+/// The critical time step of the assembly's links [s]: 2 / sqrt(lambda_max)
+/// of its linearised link stiffness (stiffness_action: translations and
+/// rotations, link weights included) over its masses and inertias, by power
+/// iteration (core::max_eigenvalue, relative tolerance rtol on lambda).
+/// Sharper than critical_time_step, the Gershgorin bound, which is on the
+/// safe side; the coupled step (bridge::CoupledSolver) compares with it.
+/// @throws std::runtime_error if no link is intact.
+double particle_critical_time_step(const Particles& p, const Links& l, double rtol = 1e-6);
 
 } // namespace dembridge::dem

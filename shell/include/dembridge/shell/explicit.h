@@ -7,6 +7,7 @@
 /// internal-force callback.
 
 #include "dembridge/core/checkpoint.h"
+#include "dembridge/core/stepping.h"
 
 #include <array>
 #include <cstdint>
@@ -79,18 +80,6 @@ select_nodes(std::span<const double> x,
 /// Dofs node * bs + c for each node and each component c in `components`.
 std::vector<std::int32_t> node_dofs(std::span<const std::int32_t> nodes, int bs,
                                     std::span<const int> components);
-
-/// Largest eigenvalue of M^-1 K by power iteration on M^-1/2 K M^-1/2,
-/// K given by its action `f_int` (linear). Stops when the Rayleigh quotient
-/// changes by less than `rtol` or after `max_iter` iterations.
-/// Returns lambda_max [1/s^2]; the critical step is 2 / sqrt(lambda_max).
-/// With `project`, the iteration runs on the motions it leaves unchanged: it
-/// must be the mass-orthogonal projection onto them (a linear constraint on
-/// velocities, as the coupling's multiplier correction), and the result is
-/// lambda_max of the constrained system.
-double max_eigenvalue(std::span<const double> mass, const InternalForceFn& f_int,
-                      double rtol = 1e-6, int max_iter = 5000,
-                      const std::function<void(std::span<double>)>& project = {});
 
 /// Explicit integrator, velocity Verlet (= central differences):
 ///   v(n+1/2) = v(n) + dt/2 a(n),  u(n+1) = u(n) + dt v(n+1/2),
