@@ -8,6 +8,9 @@ Reads DIR/particles.h5 and DIR/summary.json of `build/bin/impact ...
 --output DIR --summary DIR/summary.json`. The three frames are the first
 one after a quarter and after half of the run, and the last.
 
+Writes OUT.png and, beside it, OUT.json: the figures the picture shows
+(scenario, spheres, striking and residual velocity, outcome).
+
 Usage: /usr/bin/python3 scripts/render_impact.py DIR OUT.png
 """
 import json
@@ -81,6 +84,11 @@ def main(run_dir, out_png):
     fig.suptitle(f"{summary['scenario']}: {summary['striking_velocity_m_s']:g} m/s, residual "
                  f"{summary['residual_velocity_m_s']:.0f} m/s, {summary['particles']} spheres (cut at y = 0)")
     fig.savefig(out_png, dpi=110, bbox_inches="tight")
+    # the figures the picture shows, beside it (tests/check_picture.py
+    # compares them with a fresh run and with README.md's caption)
+    figures = {k: summary[k] for k in ("scenario", "particles", "striking_velocity_m_s", "outcome")}
+    figures["residual_velocity_m_s"] = round(summary["residual_velocity_m_s"])
+    Path(out_png).with_suffix(".json").write_text(json.dumps(figures, indent=2) + "\n")
 
 
 if __name__ == "__main__":
