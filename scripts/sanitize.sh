@@ -1,9 +1,9 @@
 #!/bin/sh
 # Builds the test programs with AddressSanitizer and UndefinedBehaviorSanitizer
-# in their own folder (build-asan, -O1) and runs them, the two side by side:
-# unit_tests and dem_tests without their longest cases ([long], and the
-# identification's runs, [calibrate]), which repeat code paths the other
-# cases run. Any report stops the run with a non-zero exit. scripts/test.sh
+# in their own folder (build-asan, -O1) and runs them side by side:
+# unit_tests and dem_tests (its samples apart) without their longest cases
+# ([long], and the identification's runs, [calibrate]), which repeat code
+# paths the other cases run. Any report stops the run with a non-zero exit. scripts/test.sh
 # calls it after the suite. On 2 cores: about 6 minutes to build from
 # scratch, 3 to run.
 set -eu
@@ -20,12 +20,16 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   -DCMAKE_SHARED_LINKER_FLAGS="-fsanitize=address,undefined" -DDEMBRIDGE_IPO=OFF
 cmake --build build-asan -j"$(nproc)" --target unit_tests dem_tests
 export OMP_NUM_THREADS=1
+# three processes on the cores: the unit tests, the DE samples, the other DE
+# tests (each about a third of the work)
 ./build-asan/bin/unit_tests "~[long]" > build-asan/unit_tests.log 2>&1 &
 unit=$!
-./build-asan/bin/dem_tests "~[calibrate]~[long]" > build-asan/dem_tests.log 2>&1 &
+./build-asan/bin/dem_tests "[sample]~[calibrate]~[long]" > build-asan/dem_samples.log 2>&1 &
+samples=$!
+./build-asan/bin/dem_tests "~[sample]~[calibrate]~[long]" > build-asan/dem_tests.log 2>&1 &
 dem=$!
 status=0
-for job in "unit_tests $unit" "dem_tests $dem"; do
+for job in "unit_tests $unit" "dem_samples $samples" "dem_tests $dem"; do
   set -- $job
   if wait "$2"; then
     echo "sanitizers: $1: $(tail -n 2 build-asan/$1.log | head -n 1)"

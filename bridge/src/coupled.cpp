@@ -49,7 +49,7 @@ CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& 
     // closes: the coupler guards that
     _fe_solver->set_energy_guard(0.0);
     _de_solver->set_energy_guard(0.0);
-    _guard_margin = o.energy_guard;
+    _guard.set(o.energy_guard, guard_every); // (checked above: >= 0)
   }
   catch (...)
   {
@@ -270,7 +270,7 @@ double CoupledSolver::step(bool observed)
   _time.fe += (t1 - t0) + (t4 - t3);
   _time.de += (t2 - t1) + (t5 - t4);
   _time.multipliers += (t3 - t2) + (t6 - t5);
-  if (_guard_margin > 0.0 && _de_solver->steps() % guard_every == 0)
+  if (_guard.due(_de_solver->steps()))
     check_energy();
   return _residual;
 }
@@ -282,14 +282,8 @@ void CoupledSolver::check_energy() const
   const double work = e.fe.external_work + e.fe.prescribed_work + e.de.external_work + e.de.prescribed_work;
   const double scale = initial + std::abs(e.fe.external_work) + std::abs(e.fe.prescribed_work)
                        + std::abs(e.de.external_work) + std::abs(e.de.prescribed_work) + e.total();
-  if (!(scale > 0.0) || e.imbalance() <= _guard_margin * scale)
-    return;
-  std::ostringstream s;
-  s << "the coupled system's energy grows without cause at t = " << _de_solver->time() << " s (step "
-    << _de_solver->steps() << "): kinetic + stored " << e.total() << " J against initial " << initial
-    << " J + work " << work << " J (" << e.imbalance() << " J unaccounted for, more than " << _guard_margin
-    << " x the energy scale): the run is unstable; reduce the time step";
-  throw std::runtime_error(s.str());
+  _guard.check({_de_solver->time(), _de_solver->steps(), "the coupled system's energy", "kinetic + stored", e.total(),
+                initial, work, e.imbalance(), scale});
 }
 
 CoupledEnergy CoupledSolver::energy() const

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numeric>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
 
@@ -46,6 +47,26 @@ double max_eigenvalue(std::span<const double> mass, const LinearAction& k, doubl
     lambda = rq;
   }
   return lambda;
+}
+
+void EnergyGuard::set(double margin, std::int64_t every)
+{
+  if (!(margin >= 0.0) || !std::isfinite(margin) || every < 1)
+    throw std::runtime_error("energy guard: margin " + std::to_string(margin) + " must be >= 0 (0 = off), every "
+                             + std::to_string(every) + " steps >= 1");
+  _margin = margin;
+  _every = every;
+}
+
+void EnergyGuard::check(const Budget& b) const
+{
+  if (!(b.scale > 0.0) || b.imbalance <= _margin * b.scale)
+    return;
+  std::ostringstream s;
+  s << b.system << " grows without cause at t = " << b.t << " s (step " << b.step << "): " << b.stored_name << " "
+    << b.stored << " J against initial " << b.initial << " J + work " << b.work << " J (" << b.imbalance
+    << " J unaccounted for, more than " << _margin << " x the energy scale): the run is unstable; reduce the time step";
+  throw std::runtime_error(s.str());
 }
 
 } // namespace dembridge::core

@@ -34,122 +34,127 @@ Point gradient(const Region& g, const Point& x, double h)
   return d;
 }
 
-/// Where the boundary is left uncovered (a point of it farther than 0.75
-/// Rmax from every sphere surface), inserts the largest sphere of at most
-/// Rmax tangent to the boundary there that overlaps nothing, if it is at
-/// least Rmin. Boundary points are sampled every Rmin / 2 on tangent planes
-/// of cells of 2 Rmax along the boundary; since the gap varies by at most
-/// the sampling distance, what is left is below 0.75 Rmax + Rmin / (2 sqrt 2)
-/// < Rmax wherever such a sphere fits (always, for Rmax/Rmin >= 2, on flat
-/// faces: a tangent sphere of radius gap / 2 always fits). Returns the number
-/// of spheres added (appended to p).
-std::size_t fill_uncovered(Packing& p, const Region& g, double rmin, double rmax, double h)
+namespace
 {
-  const double L = 2.0 * rmax, hs = 0.5 * rmin, flat = 1e-9 * L;
-  CellGrid grid(p.x, 3.0 * rmax);
-  int m[3];
-  for (int k = 0; k < 3; ++k)
-    m[k] = std::max(1, static_cast<int>(std::ceil((g.hi[k] - g.lo[k]) / L)));
-  const std::size_t cells = std::size_t(m[0]) * m[1] * m[2];
-  struct Candidate
+struct Candidate
+{
+  Point c;
+  double r;
+  std::size_t cell;
+};
+
+double dot(const Point& a, const Point& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/// The largest radius <= rmax of a sphere tangent to the boundary at q
+/// (inward normal `in`) that overlaps no sphere of p and stays in the
+/// region; 0 if none of at least rmin.
+double largest_tangent(const Packing& p, const CellGrid& grid, const Region& g, const Point& q, const Point& in,
+                       double rmin, double rmax)
+{
+  double rho = rmax;
+  grid.for_each_near(q.data(),
+                     [&](std::int32_t j)
+                     {
+                       const Point d{q[0] - p.x[3 * j], q[1] - p.x[3 * j + 1], q[2] - p.x[3 * j + 2]};
+                       const double den = p.r[j] - dot(d, in);
+                       if (den > 0.0)
+                         rho = std::min(rho, (dot(d, d) - p.r[j] * p.r[j]) / (2.0 * den));
+                     });
+  auto inside = [&](double r)
+  { return g.sdf({q[0] + r * in[0], q[1] + r * in[1], q[2] + r * in[2]}) + r <= 1e-4 * rmin; };
+  if (rho < rmin || !inside(rmin))
+    return 0.0;
+  if (!inside(rho)) // near an edge: bisect down to the largest that fits
   {
-    Point c;
-    double r;
-    std::size_t cell;
-  };
-  auto dot = [](const Point& a, const Point& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
-  // largest radius <= rmax of a sphere tangent at q (inward normal in) that
-  // overlaps no sphere of p and stays in the region; 0 if none
-  auto largest = [&](const Point& q, const Point& in)
-  {
-    double rho = rmax;
-    grid.for_each_near(q.data(),
-                       [&](std::int32_t j)
-                       {
-                         const Point d{q[0] - p.x[3 * j], q[1] - p.x[3 * j + 1], q[2] - p.x[3 * j + 2]};
-                         const double den = p.r[j] - dot(d, in);
-                         if (den > 0.0)
-                           rho = std::min(rho, (dot(d, d) - p.r[j] * p.r[j]) / (2.0 * den));
-                       });
-    auto inside = [&](double r)
-    { return g.sdf({q[0] + r * in[0], q[1] + r * in[1], q[2] + r * in[2]}) + r <= 1e-4 * rmin; };
-    if (rho < rmin || !inside(rmin))
-      return 0.0;
-    if (!inside(rho)) // near an edge: bisect down to the largest that fits
-    {
-      double a = rmin, b = rho;
-      for (int it = 0; it < 30; ++it)
-        (inside(0.5 * (a + b)) ? a : b) = 0.5 * (a + b);
-      rho = a;
-    }
-    return rho;
-  };
-  std::vector<std::vector<Candidate>> found(cells);
-#pragma omp parallel for schedule(dynamic, 64)
-  for (std::size_t id = 0; id < cells; ++id)
-  {
-    const int ci[3] = {int(id / (std::size_t(m[1]) * m[2])), int(id / m[2] % m[1]), int(id % m[2])};
-    Point lo, c;
-    for (int k = 0; k < 3; ++k)
-    {
-      lo[k] = g.lo[k] + ci[k] * L;
-      c[k] = lo[k] + 0.5 * L;
-    }
-    const double sc = g.sdf(c);
-    if (std::abs(sc) > 0.87 * L)
-      continue;
-    const Point gc = gradient(g, c, h);
-    const Point q0{c[0] - sc * gc[0], c[1] - sc * gc[1], c[2] - sc * gc[2]};
-    const Point n = gradient(g, q0, h);
-    // two tangents
-    const int a = std::abs(n[0]) < 0.6 ? 0 : (std::abs(n[1]) < 0.6 ? 1 : 2);
-    Point t1{0.0, 0.0, 0.0};
-    t1[a] = 1.0;
-    const double tn = dot(t1, n);
-    for (int k = 0; k < 3; ++k)
-      t1[k] -= tn * n[k];
-    const double l1 = std::sqrt(dot(t1, t1));
-    for (auto& v : t1)
-      v /= l1;
-    const Point t2{n[1] * t1[2] - n[2] * t1[1], n[2] * t1[0] - n[0] * t1[2], n[0] * t1[1] - n[1] * t1[0]};
-    const int steps = static_cast<int>(std::ceil(0.87 * L / hs));
-    for (int u = -steps; u <= steps; ++u)
-      for (int w = -steps; w <= steps; ++w)
-      {
-        Point q;
-        for (int k = 0; k < 3; ++k)
-          q[k] = q0[k] + u * hs * t1[k] + w * hs * t2[k];
-        Point nq = n;
-        double sq = g.sdf(q);
-        for (int it = 0; it < 3 && std::abs(sq) > flat; ++it) // project onto a curved boundary
-        {
-          nq = gradient(g, q, h);
-          for (int k = 0; k < 3; ++k)
-            q[k] -= sq * nq[k];
-          sq = g.sdf(q);
-        }
-        bool mine = std::abs(sq) <= 1e-6 * L;
-        for (int k = 0; k < 3; ++k)
-          mine = mine && q[k] >= lo[k] && q[k] < lo[k] + L;
-        if (!mine)
-          continue;
-        double gap = 2.0 * rmax;
-        grid.for_each_near(q.data(),
-                           [&](std::int32_t j)
-                           {
-                             const double dx = q[0] - p.x[3 * j], dy = q[1] - p.x[3 * j + 1],
-                                          dz = q[2] - p.x[3 * j + 2];
-                             gap = std::min(gap, std::sqrt(dx * dx + dy * dy + dz * dz) - p.r[j]);
-                           });
-        if (gap <= 0.75 * rmax)
-          continue;
-        const Point in{-nq[0], -nq[1], -nq[2]};
-        const double rho = largest(q, in);
-        if (rho >= rmin)
-          found[id].push_back({{q[0] + rho * in[0], q[1] + rho * in[1], q[2] + rho * in[2]}, rho, id});
-      }
+    double a = rmin, b = rho;
+    for (int it = 0; it < 30; ++it)
+      (inside(0.5 * (a + b)) ? a : b) = 0.5 * (a + b);
+    rho = a;
   }
-  // the largest first; each must miss those already added
+  return rho;
+}
+
+/// The boundary fill's grid: cells of side L = 2 Rmax over the bounding box.
+struct FillGrid
+{
+  double L;
+  int m[3];
+  std::size_t cells() const { return std::size_t(m[0]) * m[1] * m[2]; }
+};
+
+/// The candidates of one cell of the grid that the boundary crosses: its
+/// boundary points sampled every Rmin / 2 on the tangent plane at the
+/// point nearest its centre (projected onto a curved boundary), those
+/// farther than 0.75 Rmax from every sphere surface, each with its largest
+/// tangent sphere.
+void scan_cell(const Packing& p, const CellGrid& grid, const Region& g, const FillGrid& fg, std::size_t id,
+               double rmin, double rmax, double h, std::vector<Candidate>& found)
+{
+  const double L = fg.L, hs = 0.5 * rmin, flat = 1e-9 * L;
+  const int ci[3] = {int(id / (std::size_t(fg.m[1]) * fg.m[2])), int(id / fg.m[2] % fg.m[1]), int(id % fg.m[2])};
+  Point lo, c;
+  for (int k = 0; k < 3; ++k)
+  {
+    lo[k] = g.lo[k] + ci[k] * L;
+    c[k] = lo[k] + 0.5 * L;
+  }
+  const double sc = g.sdf(c);
+  if (std::abs(sc) > 0.87 * L)
+    return;
+  const Point gc = gradient(g, c, h);
+  const Point q0{c[0] - sc * gc[0], c[1] - sc * gc[1], c[2] - sc * gc[2]};
+  const Point n = gradient(g, q0, h);
+  // two tangents
+  const int a = std::abs(n[0]) < 0.6 ? 0 : (std::abs(n[1]) < 0.6 ? 1 : 2);
+  Point t1{0.0, 0.0, 0.0};
+  t1[a] = 1.0;
+  const double tn = dot(t1, n);
+  for (int k = 0; k < 3; ++k)
+    t1[k] -= tn * n[k];
+  const double l1 = std::sqrt(dot(t1, t1));
+  for (auto& v : t1)
+    v /= l1;
+  const Point t2{n[1] * t1[2] - n[2] * t1[1], n[2] * t1[0] - n[0] * t1[2], n[0] * t1[1] - n[1] * t1[0]};
+  const int steps = static_cast<int>(std::ceil(0.87 * L / hs));
+  for (int u = -steps; u <= steps; ++u)
+    for (int w = -steps; w <= steps; ++w)
+    {
+      Point q;
+      for (int k = 0; k < 3; ++k)
+        q[k] = q0[k] + u * hs * t1[k] + w * hs * t2[k];
+      Point nq = n;
+      double sq = g.sdf(q);
+      for (int it = 0; it < 3 && std::abs(sq) > flat; ++it) // project onto a curved boundary
+      {
+        nq = gradient(g, q, h);
+        for (int k = 0; k < 3; ++k)
+          q[k] -= sq * nq[k];
+        sq = g.sdf(q);
+      }
+      bool mine = std::abs(sq) <= 1e-6 * L;
+      for (int k = 0; k < 3; ++k)
+        mine = mine && q[k] >= lo[k] && q[k] < lo[k] + L;
+      if (!mine)
+        continue;
+      double gap = 2.0 * rmax;
+      grid.for_each_near(q.data(),
+                         [&](std::int32_t j)
+                         {
+                           const double dx = q[0] - p.x[3 * j], dy = q[1] - p.x[3 * j + 1], dz = q[2] - p.x[3 * j + 2];
+                           gap = std::min(gap, std::sqrt(dx * dx + dy * dy + dz * dz) - p.r[j]);
+                         });
+      if (gap <= 0.75 * rmax)
+        continue;
+      const Point in{-nq[0], -nq[1], -nq[2]};
+      const double rho = largest_tangent(p, grid, g, q, in, rmin, rmax);
+      if (rho >= rmin)
+        found.push_back({{q[0] + rho * in[0], q[1] + rho * in[1], q[2] + rho * in[2]}, rho, id});
+    }
+}
+
+/// The candidates, the largest first, each kept if it misses those already kept.
+std::vector<Candidate> disjoint(const std::vector<std::vector<Candidate>>& found)
+{
   std::vector<Candidate> all;
   for (auto& f : found)
     all.insert(all.end(), f.begin(), f.end());
@@ -166,6 +171,30 @@ std::size_t fill_uncovered(Packing& p, const Region& g, double rmin, double rmax
     if (free)
       added.push_back(cand);
   }
+  return added;
+}
+} // namespace
+
+/// Where the boundary is left uncovered (a point of it farther than 0.75
+/// Rmax from every sphere surface), inserts the largest sphere of at most
+/// Rmax tangent to the boundary there that overlaps nothing, if it is at
+/// least Rmin. Boundary points are sampled every Rmin / 2 on tangent planes
+/// of cells of 2 Rmax along the boundary; since the gap varies by at most
+/// the sampling distance, what is left is below 0.75 Rmax + Rmin / (2 sqrt 2)
+/// < Rmax wherever such a sphere fits (always, for Rmax/Rmin >= 2, on flat
+/// faces: a tangent sphere of radius gap / 2 always fits). Returns the number
+/// of spheres added (appended to p).
+std::size_t fill_uncovered(Packing& p, const Region& g, double rmin, double rmax, double h)
+{
+  FillGrid fg{2.0 * rmax, {}};
+  for (int k = 0; k < 3; ++k)
+    fg.m[k] = std::max(1, static_cast<int>(std::ceil((g.hi[k] - g.lo[k]) / fg.L)));
+  const CellGrid grid(p.x, 3.0 * rmax);
+  std::vector<std::vector<Candidate>> found(fg.cells());
+#pragma omp parallel for schedule(dynamic, 64)
+  for (std::size_t id = 0; id < fg.cells(); ++id)
+    scan_cell(p, grid, g, fg, id, rmin, rmax, h, found[id]);
+  const std::vector<Candidate> added = disjoint(found);
   for (const auto& a : added)
   {
     p.x.insert(p.x.end(), a.c.begin(), a.c.end());

@@ -66,6 +66,10 @@ struct BarConfig
 /// @throws std::runtime_error naming the value and what is allowed.
 void check_config(const BarConfig& c);
 
+/// Throws std::runtime_error "what value: allowed is allowed" (a value of
+/// the configuration out of its range).
+[[noreturn]] void bad(const std::string& what, double value, const std::string& allowed);
+
 /// Runs one case; returns the summary (keys: model,
 /// load, regime, particles, shell_nodes, probe_0_75 and probe_0_4351 with
 /// first_frequency_hz and amplitude_m (dynamic), static_end_displacement_m

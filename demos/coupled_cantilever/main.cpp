@@ -341,7 +341,7 @@ private:
     // the shared time loop (time_loop.h): a frame and a CSV row every
     // _every steps and at the end
     const demo::LoopPlan plan{
-        .done = _s->fe().steps(), .last = _nsteps, .frames = {_every}, .checkpoints = _ckpt.get()};
+        .done = _s->fe().steps(), .last = _nsteps, .rows = {}, .frames = {_every}, .prints = {}, .checkpoints = _ckpt.get()};
     double r = 0.0; // the step's multiplier residual [m/s]
     demo::LoopHooks h;
     h.step = [&](std::int64_t k)

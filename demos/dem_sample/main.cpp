@@ -21,6 +21,51 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+namespace
+{
+/// The concrete law's options (docs/method.md 1.1-1.7d), each overriding
+/// the --material file's value (defined after --material: CLI11 assigns
+/// options in the order they are defined).
+void add_law_options(CLI::App& app, dembridge::dem::Material& m)
+{
+  using dembridge::demo::Allowed;
+  namespace demo = dembridge::demo;
+  const Allowed angle{0.0, 90.0, false, true, {}, {}};
+  demo::add_number(app, "--youngs-modulus", m.youngs_modulus, "E in equation [1] [Pa]", Allowed::positive(1e13));
+  demo::add_number(app, "--poisson-ratio", m.poisson_ratio, "nu in equation [1] [-]", Allowed::open(-1.0, 0.5));
+  demo::add_number(app, "--density", m.density, "bulk density of the concrete [kg/m^3]", Allowed::positive(1e5));
+  demo::add_number(app, "--alpha", m.micro.alpha, "alpha of equation [1] [-]", Allowed::closed(-1e3, 1e3));
+  demo::add_number(app, "--beta", m.micro.beta, "beta of equation [1] [-]", Allowed::closed(-1e3, 1e3));
+  demo::add_number(app, "--gamma", m.micro.gamma, "gamma of equation [1] [-]", Allowed::closed(-1e3, 1e3));
+  demo::add_number(app, "--tensile-strength", m.tensile, "local tensile strength T [Pa]", Allowed::non_negative(1e12));
+  demo::add_number(app, "--cohesion", m.cohesion, "cohesion C0 [Pa]", Allowed::non_negative(1e12));
+  demo::add_number(app, "--softening", m.zeta, "softening factor zeta [-]", Allowed::non_negative(1e6));
+  demo::add_number(app, "--phi-i", m.phi_i_deg, "internal friction angle [degree]", angle);
+  demo::add_number(app, "--phi-c", m.phi_c_deg, "contact friction angle [degree]", angle);
+  demo::add_number(app, "--contact-shear-limit", m.contact_shear_limit,
+                   "Tresca limit of the contacts' friction, beside F_c tan(phi_c) [Pa]",
+                   Allowed::positive(1e12).or_value(0.0, "none"));
+  demo::add_number(app, "--crack-closure", m.crack_closure,
+                   "crack closure: the share of a broken link's gap at rest, D_init - (R_a + R_b), at which its "
+                   "spheres meet again, with the link's stiffnesses [-]; 1 = at D_init",
+                   Allowed::above(0.0, 1.0).or_value(0.0, "off"));
+  demo::add_number(app, "--rolling-friction", m.rolling_friction,
+                   "rolling resistance of the contacts: mu_r of the cap |M| <= mu_r R* F_c [-]",
+                   Allowed::positive(10.0).or_value(0.0, "none"));
+  demo::add_number(app, "--rate-fc", m.rate_fc,
+                   "strain-rate effect on the links' T and C0: the Malvar-Ross law's compressive strength f_c [Pa]",
+                   Allowed::positive(1e10).or_value(0.0, "no rate effect"));
+  app.add_flag("--rate-mean-tension", m.rate_mean_tension,
+               "strain-rate effect: a link's factor grows only while its spheres' links are, on the whole, stretched");
+  app.add_flag("--rate-current", m.rate_current,
+               "strain-rate effect: a link's factor follows its current rate, not the largest so far (never below "
+               "what the link holds)");
+  demo::add_number(app, "--rate-filter", m.rate_filter,
+                   "strain-rate effect: time constant of the low-pass filter on each link's rate [s]",
+                   Allowed::positive(1.0).or_value(0.0, "no filter"));
+}
+} // namespace
+
 int main(int argc, char** argv)
 {
   using namespace dembridge;
@@ -29,7 +74,6 @@ int main(int argc, char** argv)
   auto& m = c.material;
   CLI::App app{"DE sample in quasi-static uniaxial tension or compression, or triaxial compression", "dem_sample"};
   using demo::Allowed;
-  const Allowed angle{0.0, 90.0, false, true, {}, {}};
   demo::add_choice(app, "--test", c.test, "the test", "tension | compression | triaxial");
   demo::add_choice(app, "--shape", c.shape, "the sample's shape", "cylinder | prism");
   demo::add_number(app, "--confinement", c.confinement,
@@ -78,38 +122,7 @@ int main(int argc, char** argv)
              });
   demo::add_number(app, "--links-per-sphere", c.links_per_sphere, "target mean number of links per sphere in the bulk",
                    Allowed::positive(100.0));
-  demo::add_number(app, "--youngs-modulus", m.youngs_modulus, "E in equation [1] [Pa]", Allowed::positive(1e13));
-  demo::add_number(app, "--poisson-ratio", m.poisson_ratio, "nu in equation [1] [-]", Allowed::open(-1.0, 0.5));
-  demo::add_number(app, "--density", m.density, "bulk density of the concrete [kg/m^3]", Allowed::positive(1e5));
-  demo::add_number(app, "--alpha", m.micro.alpha, "alpha of equation [1] [-]", Allowed::closed(-1e3, 1e3));
-  demo::add_number(app, "--beta", m.micro.beta, "beta of equation [1] [-]", Allowed::closed(-1e3, 1e3));
-  demo::add_number(app, "--gamma", m.micro.gamma, "gamma of equation [1] [-]", Allowed::closed(-1e3, 1e3));
-  demo::add_number(app, "--tensile-strength", m.tensile, "local tensile strength T [Pa]", Allowed::non_negative(1e12));
-  demo::add_number(app, "--cohesion", m.cohesion, "cohesion C0 [Pa]", Allowed::non_negative(1e12));
-  demo::add_number(app, "--softening", m.zeta, "softening factor zeta [-]", Allowed::non_negative(1e6));
-  demo::add_number(app, "--phi-i", m.phi_i_deg, "internal friction angle [degree]", angle);
-  demo::add_number(app, "--phi-c", m.phi_c_deg, "contact friction angle [degree]", angle);
-  demo::add_number(app, "--contact-shear-limit", m.contact_shear_limit,
-                   "Tresca limit of the contacts' friction, beside F_c tan(phi_c) [Pa]",
-                   Allowed::positive(1e12).or_value(0.0, "none"));
-  demo::add_number(app, "--crack-closure", m.crack_closure,
-                   "crack closure: the share of a broken link's gap at rest, D_init - (R_a + R_b), at which its "
-                   "spheres meet again, with the link's stiffnesses [-]; 1 = at D_init",
-                   Allowed::above(0.0, 1.0).or_value(0.0, "off"));
-  demo::add_number(app, "--rolling-friction", m.rolling_friction,
-                   "rolling resistance of the contacts: mu_r of the cap |M| <= mu_r R* F_c [-]",
-                   Allowed::positive(10.0).or_value(0.0, "none"));
-  demo::add_number(app, "--rate-fc", m.rate_fc,
-                   "strain-rate effect on the links' T and C0: the Malvar-Ross law's compressive strength f_c [Pa]",
-                   Allowed::positive(1e10).or_value(0.0, "no rate effect"));
-  app.add_flag("--rate-mean-tension", m.rate_mean_tension,
-               "strain-rate effect: a link's factor grows only while its spheres' links are, on the whole, stretched");
-  app.add_flag("--rate-current", m.rate_current,
-               "strain-rate effect: a link's factor follows its current rate, not the largest so far (never below "
-               "what the link holds)");
-  demo::add_number(app, "--rate-filter", m.rate_filter,
-                   "strain-rate effect: time constant of the low-pass filter on each link's rate [s]",
-                   Allowed::positive(1.0).or_value(0.0, "no filter"));
+  add_law_options(app, m);
   demo::add_number(app, "--ligament", c.ligament,
                    "notch at mid-height: the ligament's share of the cross-section; 1 = no notch "
                    "(stresses and fracture energy are then per ligament area)", Allowed::above(0.0, 1.0));

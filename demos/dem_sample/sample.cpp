@@ -556,7 +556,8 @@ private:
     const std::int64_t print_every = std::max<std::int64_t>(1, nsteps / 20);
     // the shared time loop (time_loop.h); the measurement points drive the
     // end condition (past the peak) and write the rows and frames
-    const LoopPlan plan{.done = _solver->steps(), .last = nsteps, .checkpoints = _ckpt.get()};
+    const LoopPlan plan{
+        .done = _solver->steps(), .last = nsteps, .rows = {}, .frames = {}, .prints = {}, .checkpoints = _ckpt.get()};
     LoopHooks h = solver_hooks(*_solver);
     h.after_step = [&](std::int64_t s)
     {

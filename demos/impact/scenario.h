@@ -149,4 +149,7 @@ std::function<double(const dem::Point&)> fine_scale(const Scenario& s);
 /// (`impact --keys`; docs/impact.md lists the same).
 std::string scenario_keys();
 
+/// A number as the scenario's messages print it (12 significant digits).
+std::string number_text(double v);
+
 } // namespace dembridge::demo

@@ -87,4 +87,27 @@ std::array<double, 2> change_of_slope(std::span<const double> x, std::span<const
 /// Runs the beam; returns the summary (docs/demos.md, rc_beam).
 nlohmann::json run_beam(const BeamConfig& c);
 
+/// Least-squares line y = a x + b through the points added.
+struct LineFit
+{
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  int n = 0;
+  void add(double x, double y)
+  {
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+    ++n;
+  }
+  double det() const { return n * sxx - sx * sx; }
+  double slope() const { return (n * sxy - sx * sy) / det(); }
+  double intercept() const { return (sy - slope() * sx) / n; }
+};
+
+/// Least-squares slope of y against x over the points with lo <= y <= hi
+/// before y first exceeds hi (the loading branch, not the points where the
+/// load falls back into the window after a crack).
+double slope(const std::vector<double>& x, const std::vector<double>& y, double lo, double hi);
+
 } // namespace dembridge::demo

@@ -403,7 +403,8 @@ private:
     const std::int64_t print_every = std::max<std::int64_t>(1, nsteps / 10);
     // the shared time loop (time_loop.h); the energies are sampled every
     // 10 steps and at each frame
-    const LoopPlan plan{.done = _solver->steps(), .last = nsteps, .checkpoints = _ckpt.get()};
+    const LoopPlan plan{
+        .done = _solver->steps(), .last = nsteps, .rows = {}, .frames = {}, .prints = {}, .checkpoints = _ckpt.get()};
     LoopHooks h = solver_hooks(*_solver);
     h.after_step = [&](std::int64_t s)
     {

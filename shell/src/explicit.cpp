@@ -254,30 +254,19 @@ void ExplicitSolver::end_step()
         << "): the run is unstable; reduce the time step or check the loads";
     throw std::runtime_error(msg.str());
   }
-  if (_guard_margin > 0.0 && _steps % _guard_every == 0)
+  if (_guard.due(_steps))
   {
     const EnergyBudget e = energy();
     const double work = e.external_work + e.prescribed_work;
     const double scale = e.initial + std::abs(e.external_work) + std::abs(e.prescribed_work) + e.kinetic + e.strain;
-    if (scale > 0.0 && e.imbalance() > _guard_margin * scale)
-    {
-      std::ostringstream msg;
-      msg << "the energy grows without cause at t = " << _t << " s (step " << _steps << "): kinetic + strain "
-          << e.kinetic + e.strain << " J against initial " << e.initial << " J + work " << work
-          << " J (" << e.imbalance() << " J unaccounted for, more than " << _guard_margin
-          << " x the energy scale): the run is unstable; reduce the time step";
-      throw std::runtime_error(msg.str());
-    }
+    _guard.check({_t, _steps, "the energy", "kinetic + strain", e.kinetic + e.strain, e.initial, work, e.imbalance(),
+                  scale});
   }
 }
 
 void ExplicitSolver::set_energy_guard(double margin, std::int64_t every)
 {
-  if (!(margin >= 0.0) || !std::isfinite(margin) || every < 1)
-    throw std::runtime_error("energy guard: margin " + std::to_string(margin) + " must be >= 0 (0 = off), every "
-                             + std::to_string(every) + " steps >= 1");
-  _guard_margin = margin;
-  _guard_every = every;
+  _guard.set(margin, every);
 }
 
 void ExplicitSolver::step()

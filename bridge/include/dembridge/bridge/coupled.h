@@ -150,7 +150,7 @@ private:
   std::unique_ptr<shell::ExplicitSolver> _fe_solver;
   std::unique_ptr<dem::DemSolver> _de_solver;
   CoupledTimings _time;
-  double _guard_margin = 0.5;
+  core::EnergyGuard _guard;
   void check_energy() const; // the energy guard
   double _dt = 0.0, _dt_coupled = 0.0, _dt_fe = 0.0, _dt_de = 0.0, _multiplier_energy = 0.0,
          _residual = 0.0;

@@ -5,6 +5,8 @@
 /// external forces (optionally through a rigid, possibly rotating, loading
 /// plate). DemSolver (solver.h) applies them.
 
+#include "dembridge/core/stepping.h"
+
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -14,14 +16,11 @@
 namespace dembridge::dem
 {
 
-using History = std::function<double(double)>;
-
-enum class MotionKind
-{
-  fixed,        ///< translations and rotations held at zero velocity
-  velocity,     ///< the chosen components follow value(t) [m/s]
-  displacement  ///< the chosen components follow x0 + value(t) [m]
-};
+/// (core/stepping.h) On spheres: fixed holds translations and rotations at
+/// zero velocity; velocity, the chosen components follow value(t) [m/s];
+/// displacement, they follow x0 + value(t) [m].
+using core::History;
+using core::MotionKind;
 
 /// A kinematic condition on a set of particles.
 struct ParticleMotion

@@ -5,6 +5,7 @@
 /// proportional damping and the energy budget. The force loop it calls each
 /// step is in forces.h.
 
+#include "dembridge/core/stepping.h"
 #include "dembridge/dem/assembly.h"
 #include "dembridge/dem/bars.h"
 #include "dembridge/dem/body.h"
@@ -239,8 +240,7 @@ private:
   void load_bars(const checkpoint::Group& g);
   double _dt, _c, _t = 0.0;
   std::int64_t _steps = 0;
-  double _guard_margin = 0.5;
-  std::int64_t _guard_every = 100;
+  core::EnergyGuard _guard;
   void check_energy() const; // the energy guard
   [[noreturn]] void energy_runaway(double kinetic, double budget) const;
   bool _in_step = false;

@@ -19,20 +19,16 @@
 namespace dembridge::shell
 {
 
-/// A scalar history of time: value(t) in SI units.
-using History = std::function<double(double)>;
+using core::History;
 
 /// Internal-force callback: f = f_int(u). Spans of length num_dofs.
 using InternalForceFn
     = std::function<void(std::span<const double> u, std::span<double> f)>;
 
-/// How a set of dofs is driven.
-enum class MotionKind
-{
-  fixed,        ///< u = 0, v = 0
-  velocity,     ///< v(t) = value(t) [m/s or rad/s]
-  displacement  ///< u(t) = value(t) [m or rad]
-};
+/// How a set of dofs is driven (core/stepping.h): fixed, u = 0 and v = 0;
+/// velocity, v(t) = value(t) [m/s or rad/s]; displacement, u(t) = value(t)
+/// [m or rad].
+using core::MotionKind;
 
 /// A kinematic boundary condition on a set of dofs (all get the same value).
 struct PrescribedMotion
@@ -161,8 +157,7 @@ private:
   std::vector<NodalLoad> _loads;
   double _dt, _c, _t = 0.0;
   std::int64_t _steps = 0;
-  double _guard_margin = 0.5;
-  std::int64_t _guard_every = 100;
+  core::EnergyGuard _guard;
   EnergyBudget _e;
 };
 
