@@ -121,10 +121,7 @@ public:
     build_solvers();
     apply_conditions();
     set_up_probes();
-    if (_ckpt && _ckpt->restarting())
-      resume();
-    else
-      open_output();
+    start_or_resume(_ckpt.get(), [this] { resume(); }, [this] { open_output(); });
     march();
     return summary();
   }

@@ -62,10 +62,9 @@ int main(int argc, char** argv)
   demo::add_number(app, "--safety-factor", c.safety, "fraction of the critical time step (a power-iteration estimate, from below)", Allowed::above(0.0, 0.95));
   demo::add_integer(app, "--frames", c.frames, "XDMF output frames", Allowed::closed(1, 100000));
   demo::add_program(app, "--python", python, "Python with matplotlib for the --compare plots");
-  demo::add_output_dir(app, "--output", c.output, "output folder (history.csv, shape.csv, shell.xdmf, particles.xdmf); empty = none");
-  demo::add_output_file(app, "--summary", summary, "write key results as JSON to this file");
   demo::RestartOptions restart;
-  demo::add_restart_options(app, restart);
+  demo::add_run_options(app, c.output, "output folder (history.csv, shape.csv, shell.xdmf, particles.xdmf); empty = none",
+                        summary, restart);
   if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
     return rc;
   c.skin_compensation = skin == "true";

@@ -34,6 +34,21 @@ void add_restart_options(CLI::App& app, RestartOptions& o)
              });
 }
 
+void add_run_options(CLI::App& app, std::string& output_dir, const std::string& output_help, std::string& summary,
+                     RestartOptions& restart)
+{
+  add_output_dir(app, "--output", output_dir, output_help);
+  add_output_file(app, "--summary", summary, "write the results as JSON to this file");
+  add_restart_options(app, restart);
+}
+
+int parse_run_options(CLI::App& app, int argc, char** argv, RestartOptions& restart)
+{
+  if (const int rc = parse_options(app, argc, argv); rc >= 0)
+    return rc;
+  return record_setup(app, restart);
+}
+
 int record_setup(CLI::App& app, RestartOptions& o, const std::vector<std::string>& ignore)
 {
   static const std::vector<std::string> where{"--help", "--output", "--summary", "--checkpoint",

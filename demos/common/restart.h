@@ -46,6 +46,14 @@ void add_restart_options(CLI::App& app, RestartOptions& o);
 /// --checkpoint).
 int record_setup(CLI::App& app, RestartOptions& o, const std::vector<std::string>& ignore = {});
 
+/// Adds what every program with a time loop writes and how it restarts:
+/// --output DIR (`output_help` says what goes in it), --summary FILE and the
+/// checkpoint options (add_restart_options).
+void add_run_options(CLI::App& app, std::string& output_dir, const std::string& output_help, std::string& summary,
+                     RestartOptions& restart);
+/// parse_options, then record_setup: -1 to go on, or the exit code.
+int parse_run_options(CLI::App& app, int argc, char** argv, RestartOptions& restart);
+
 class Checkpointer
 {
 public:

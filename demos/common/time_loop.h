@@ -70,6 +70,17 @@ struct LoopEnd
   double wall_s = 0.0;    ///< wall-clock seconds in the loop
 };
 
+/// How every run starts its loop: from its checkpoint (`resume`) when it
+/// restarts, else with its output files opened (`open_output`).
+inline void start_or_resume(const Checkpointer* checkpoints, const std::function<void()>& resume,
+                            const std::function<void()>& open_output)
+{
+  if (checkpoints && checkpoints->restarting())
+    resume();
+  else
+    open_output();
+}
+
 /// Hooks whose step and time are those of `solver` (anything with step()
 /// and time(): dem::DemSolver, shell::ExplicitSolver), which must outlive
 /// them; the others empty.

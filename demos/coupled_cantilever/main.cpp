@@ -434,12 +434,8 @@ int main(int argc, char** argv)
   demo::add_number(app, "--periods", c.periods, "run length in periods of the all-shell model", Allowed::positive(1e4));
   demo::add_number(app, "--safety-factor", c.safety, "fraction of the coupled critical time step (a power-iteration estimate, from below)", Allowed::above(0.0, 0.95));
   demo::add_integer(app, "--frames", c.frames, "output frames", Allowed::closed(1, 100000));
-  demo::add_output_dir(app, "--output", c.output, "output folder; empty = none");
-  demo::add_output_file(app, "--summary", c.summary, "write key results as JSON to this file");
-  demo::add_restart_options(app, c.restart);
-  if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
-    return rc;
-  if (const int rc = demo::record_setup(app, c.restart); rc >= 0)
+  demo::add_run_options(app, c.output, "output folder; empty = none", c.summary, c.restart);
+  if (const int rc = demo::parse_run_options(app, argc, argv, c.restart); rc >= 0)
     return rc;
 
   return demo::run_guarded(argc, argv, [&]

@@ -142,13 +142,9 @@ int main(int argc, char** argv)
   demo::add_number(app, "--dt", c.dt, "time step [s]", Allowed::positive(1.0).or_value(0.0, "safety factor x critical"));
   demo::add_number(app, "--safety-factor", c.safety, "fraction of the critical time step [-]", Allowed::above(0.0, 1.0));
   demo::add_integer(app, "--frames", c.frames, "XDMF frames if the run goes to --max-strain", Allowed::closed(1, 100000));
-  demo::add_output_dir(app, "--output", c.output_dir, "output folder (XDMF, CSV); empty = none");
-  demo::add_output_file(app, "--summary", summary, "write key results as JSON to this file");
   demo::RestartOptions restart;
-  demo::add_restart_options(app, restart);
-  if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
-    return rc;
-  if (const int rc = demo::record_setup(app, restart); rc >= 0)
+  demo::add_run_options(app, c.output_dir, "output folder (XDMF, CSV); empty = none", summary, restart);
+  if (const int rc = demo::parse_run_options(app, argc, argv, restart); rc >= 0)
     return rc;
   c.restart = &restart;
 

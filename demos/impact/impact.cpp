@@ -80,10 +80,7 @@ public:
     build_projectile();
     set_up_solver();
     describe();
-    if (_ckpt && _ckpt->restarting())
-      resume();
-    else
-      open_output();
+    start_or_resume(_ckpt.get(), [this] { resume(); }, [this] { open_output(); });
     print_header();
     loop();
     report();

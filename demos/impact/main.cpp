@@ -46,10 +46,8 @@ int main(int argc, char** argv)
                                 "projectile.velocity_m_s=600; repeatable");
   app.add_flag("--keys", keys, "print every scenario key with its unit, default and allowed values, and exit");
   demo::add_integer(app, "--plot", plot, "1: write DIR/history.png with matplotlib, 0: no", demo::Allowed::closed(0, 1));
-  demo::add_output_dir(app, "--output", c.output_dir, "output folder (XDMF, CSV, PNG); empty = none");
-  demo::add_output_file(app, "--summary", summary, "write the results as JSON to this file");
   demo::RestartOptions restart;
-  demo::add_restart_options(app, restart);
+  demo::add_run_options(app, c.output_dir, "output folder (XDMF, CSV, PNG); empty = none", summary, restart);
   if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
     return rc;
   if (keys)

@@ -71,10 +71,7 @@ public:
     resolve_time_step();
     set_up_solver();
     initial_shape();
-    if (_ckpt && _ckpt->restarting())
-      resume();
-    else
-      open_output();
+    start_or_resume(_ckpt.get(), [this] { resume(); }, [this] { open_output(); });
     print_header();
     march();
     report();

@@ -73,13 +73,9 @@ int main(int argc, char** argv)
   demo::add_number(app, "--rotate-angle", angle_deg, "placement: rotation angle [degree]", Allowed::closed(-360.0, 360.0));
   demo::add_vector(app, "--translate", shift, "placement: translation [m]", Allowed::closed(-1e6, 1e6));
   demo::add_integer(app, "--frames", c.frames, "XDMF frames over the run", Allowed::closed(1, 100000));
-  demo::add_output_dir(app, "--output", c.output_dir, "output folder (XDMF, CSV); empty = none");
-  demo::add_output_file(app, "--summary", summary, "write key results as JSON to this file");
   demo::RestartOptions restart;
-  demo::add_restart_options(app, restart);
-  if (const int rc = demo::parse_options(app, argc, argv); rc >= 0)
-    return rc;
-  if (const int rc = demo::record_setup(app, restart); rc >= 0)
+  demo::add_run_options(app, c.output_dir, "output folder (XDMF, CSV); empty = none", summary, restart);
+  if (const int rc = demo::parse_run_options(app, argc, argv, restart); rc >= 0)
     return rc;
   c.restart = &restart;
 
