@@ -4,8 +4,8 @@
 # unit_tests and dem_tests (its samples apart) without their longest cases
 # ([long], and the identification's runs, [calibrate]), which repeat code
 # paths the other cases run. Any report stops the run with a non-zero exit. scripts/test.sh
-# calls it after the suite. On 2 cores: about 6 minutes to build from
-# scratch, 3 to run.
+# calls it after the suite. On 2 cores: about 5 minutes to build from
+# scratch, 3-4 to run.
 set -eu
 cd "$(dirname "$0")/.."
 sh scripts/install-deps.sh
