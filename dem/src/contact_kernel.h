@@ -16,7 +16,7 @@ public:
   /// links' closing reach, ForceScratch::contact_reach)
   ContactKernel(const StepLaw& w, const Particles& p, const Links& l, NeighbourList& nl, ForceScratch& s,
                 const double* rec)
-      : _w(w), _mat(w.mat), _p(p), _l(l), _nl(nl), _s(s), _rec(rec), _rad(p.r.data())
+      : _w(w), _p(p), _l(l), _nl(nl), _s(s), _rec(rec), _rad(p.r.data())
   {
   }
 
@@ -61,7 +61,7 @@ public:
     const double D = n[3];
     const double rs = _rad[i] + _rad[j];
     // where the spheres touch, and the springs (impl::contact_spring)
-    const ContactSpring cs = contact_spring(_mat, _w.cf, _l, _nl.link[q], _rad[i], _rad[j], _w.compacting);
+    const ContactSpring cs = contact_spring(_w.mat, _w.cf, _l, _nl.link[q], _rad[i], _rad[j], _w.compacting);
     double* fs_old = &_nl.fs[3 * q];
     // the rolling spring: k_r = K_s R*^2 (method.md 1.7d)
     const double r_star = _rad[i] * _rad[j] / rs;
@@ -140,7 +140,7 @@ private:
     const double dt = _w.dt;
     const Vec3 mt = trial_rolling(m_prev, {n[0], n[1], n[2]}, qa, qb, _rad[i] / rs,
                                   {(wb[0] - wa[0]) * dt, (wb[1] - wa[1]) * dt, (wb[2] - wa[2]) * dt}, kr);
-    const ShearForce rm = contact_rolling_cap(mt, fn, kr, _mat.rolling_friction * r_star, m_prev);
+    const ShearForce rm = contact_rolling_cap(mt, fn, kr, _w.mat.rolling_friction * r_star, m_prev);
     _s.pair_slip[q] += wq * rm.slip_energy;
     for (int k = 0; k < 3; ++k)
     {
@@ -151,7 +151,6 @@ private:
   }
 
   const StepLaw _w; // (a copy: one indirection less per item)
-  const Material& _mat;
   const Particles& _p;
   const Links& _l;
   NeighbourList& _nl;

@@ -266,8 +266,8 @@ void check_spin(const Particles& p, std::size_t spinning, double dt)
 }
 
 /// The links broken in this step: their energy booked in link order, their
-/// pairs handed to the contacts within this step.
-void book_broken_links(Links& l, NeighbourList& nl, ForceScratch& s, ForceCounters& c)
+/// ids in s.broken_ids (their pairs go to the contacts within this step).
+void book_broken_links(ForceScratch& s, ForceCounters& c)
 {
   s.broken_all.clear();
   for (const auto& b : s.broken)
@@ -279,7 +279,6 @@ void book_broken_links(Links& l, NeighbourList& nl, ForceScratch& s, ForceCounte
     c.breakage += e;
     s.broken_ids.push_back(k);
   }
-  nl.add_broken_links(l, s.broken_ids);
 }
 
 /// The links' sweep: each sphere's record, then every intact link's force
@@ -381,8 +380,9 @@ void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& m
   if (law.track)
     for (int k = 0; k < nt; ++k)
       c.cohesion_demand = std::max(c.cohesion_demand, s.demand[8 * k]);
+  book_broken_links(s, c);
   const double merge_start = omp_get_wtime();
-  book_broken_links(l, nl, s, c);
+  nl.add_broken_links(l, s.broken_ids);
   const double contacts_start = omp_get_wtime();
   c.neighbour_seconds += contacts_start - merge_start;
   if (s.pairs_version != nl.version() || s.pairs.first.size() != np + 1 || s.pairs.threads != nt)

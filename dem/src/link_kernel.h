@@ -12,7 +12,7 @@ class LinkKernel
 public:
   /// `rec`: the spheres' records (force_loop.h, `record`)
   LinkKernel(const StepLaw& w, const Particles& p, Links& l, ForceScratch& s, const double* rec)
-      : _w(w), _mat(w.mat), _p(p), _l(l), _s(s), _rec(rec)
+      : _w(w), _p(p), _l(l), _s(s), _rec(rec)
   {
   }
 
@@ -127,12 +127,12 @@ private:
       {
         double& onset = _l.compaction_onset[k];
         if (e > onset && e_max <= onset
-            && 0.5 * (_s.pressure[i] + _s.pressure[_l.b[k]]) < _mat.compaction.pressure)
+            && 0.5 * (_s.pressure[i] + _s.pressure[_l.b[k]]) < _w.mat.compaction.pressure)
           onset = e;
       }
       e_max = e;
     }
-    c.delta -= compaction_set(e_max, _l.d0[k], link_compaction(_l, k, _mat.compaction));
+    c.delta -= compaction_set(e_max, _l.d0[k], link_compaction(_l, k, _w.mat.compaction));
     return c;
   }
 
@@ -146,8 +146,8 @@ private:
     double& factor = _l.strength[k];
     const bool elastic = _w.rated && _l.delta_max[k] * law.kn <= law.s_int * law.tensile * factor;
     const bool stretched = !_w.gated || _s.stretch[i] + _s.stretch[_l.b[k]] > 0.0;
-    if (elastic && _mat.rate_current)
-      factor = held_factor(_l, k, law, _mat.rate_cohesion);
+    if (elastic && _w.mat.rate_current)
+      factor = held_factor(_l, k, law, _w.mat.rate_cohesion);
     if (elastic && stretched)
     {
       const double* va = &_p.v[3 * i];
@@ -160,10 +160,10 @@ private:
         rate = rf;
       }
       factor = std::max(factor,
-                        malvar_ross_dif(_mat.rate_max > 0.0 ? std::min(rate, _mat.rate_max) : rate, _mat.rate_fc));
+                        malvar_ross_dif(_w.mat.rate_max > 0.0 ? std::min(rate, _w.mat.rate_max) : rate, _w.mat.rate_fc));
     }
     law.tensile *= factor;
-    if (_mat.rate_cohesion)
+    if (_w.mat.rate_cohesion)
       law.cohesion *= factor;
   }
 
@@ -174,7 +174,7 @@ private:
                                                    const LinkLaw& law) const
   {
     const double f2 = dot3(trial.data(), trial.data());
-    const double factor = _w.factored && _mat.rate_cohesion ? _l.strength[k] : 1.0;
+    const double factor = _w.factored && _w.mat.rate_cohesion ? _l.strength[k] : 1.0;
     const double room = law.s_int * _w.demand_before * factor - fn * law.tan_phi_i;
     if (f2 > 0.0 && (room < 0.0 || f2 > room * room))
     {
@@ -201,7 +201,7 @@ private:
       _l.compaction[k] = c.e_max_old;
       if (_w.pressure_gated)
         _l.compaction_onset[k] = c.onset_old;
-      from_set = (D - _l.d0[k]) - compaction_set(c.e_max_old, _l.d0[k], link_compaction(_l, k, _mat.compaction));
+      from_set = (D - _l.d0[k]) - compaction_set(c.e_max_old, _l.d0[k], link_compaction(_l, k, _w.mat.compaction));
     }
     const double* va = &_p.v[3 * i];
     const double* vb = &_p.v[3 * _l.b[k]];
@@ -214,13 +214,13 @@ private:
     // energy, all of it at c = 1 (the same rest distance); the rest is
     // released
     double normal = 0.5 * fn_old * from_set;
-    if (_mat.crack_closure > 0.0 && from_set < 0.0)
+    if (_w.mat.crack_closure > 0.0 && from_set < 0.0)
     {
       // (the set of e_max at the step's start, as from_set's)
       const double set =
-          _w.compacting ? compaction_set(_l.compaction[k], _l.d0[k], link_compaction(_l, k, _mat.compaction)) : 0.0;
+          _w.compacting ? compaction_set(_l.compaction[k], _l.d0[k], link_compaction(_l, k, _w.mat.compaction)) : 0.0;
       const double touch =
-          contact_spring(_mat, _w.cf, _l, k, _rec[record * i + 3], _rec[record * _l.b[k] + 3], _w.compacting).touch;
+          contact_spring(_w.mat, _w.cf, _l, k, _rec[record * i + 3], _rec[record * _l.b[k] + 3], _w.compacting).touch;
       const double share = std::clamp(1.0 - (_l.d0[k] + set - touch) / -from_set, 0.0, 1.0);
       normal *= 1.0 - share * share;
     }
@@ -237,7 +237,6 @@ private:
   }
 
   const StepLaw _w; // (a copy: one indirection less per item)
-  const Material& _mat;
   const Particles& _p;
   Links& _l;
   ForceScratch& _s;

@@ -157,7 +157,7 @@ private:
     _end_time = _c.end_time > 0.0 ? _c.end_time : (_dynamic ? _ramp + 4.0 * T1 : 3.0 * T1);
     _damping = _dynamic ? 0.0 : (_c.damping >= 0.0 ? _c.damping : 4.0 * std::numbers::pi * _f1);
     if (_dynamic && _end_time < _ramp + 1.5 * T1)
-      bad("end-time [s]", _end_time,
+      refuse_value("end-time [s]", _end_time,
           "at least ramp-time + 1.5 first periods (" + std::to_string(_ramp + 1.5 * T1)
               + " s) to measure a frequency");
   }
@@ -173,18 +173,18 @@ private:
     {
       const double k = _c.overlap_start / _c.fe_size;
       if (std::abs(k - std::round(k)) > 1e-6)
-        bad("overlap-start [m]", _c.overlap_start,
+        refuse_value("overlap-start [m]", _c.overlap_start,
             "a multiple of fe-size (" + std::to_string(_c.fe_size) + " m), so the overlap is whole FE layers");
       _de_start = _c.overlap_start;
       _fe_end = _de_start + _c.overlap_layers * _c.fe_size;
       if (!(_de_start > 0.0 && _fe_end < L - 2.0 * _rmax))
-        bad("overlap end [m]", _fe_end, "overlap inside (0, length - 2 Rmax): check overlap-start and overlap-layers");
+        refuse_value("overlap end [m]", _fe_end, "overlap inside (0, length - 2 Rmax): check overlap-start and overlap-layers");
     }
     if (_use_fe)
     {
       const double k = _fe_end / _c.fe_size, kw = _c.width / _c.fe_size;
       if (std::abs(k - std::round(k)) > 1e-6 || std::abs(kw - std::round(kw)) > 1e-6)
-        bad("fe-size [m]", _c.fe_size, "a divisor of the FE region's length and of the width");
+        refuse_value("fe-size [m]", _c.fe_size, "a divisor of the FE region's length and of the width");
     }
     // The DE bar's packing starts one mean radius behind the clamp plane
     // x = 0: the held layer (centres within Rmax of the packing's face) is

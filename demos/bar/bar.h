@@ -68,7 +68,7 @@ void check_config(const BarConfig& c);
 
 /// Throws std::runtime_error "what value: allowed is allowed" (a value of
 /// the configuration out of its range).
-[[noreturn]] void bad(const std::string& what, double value, const std::string& allowed);
+[[noreturn]] void refuse_value(const std::string& what, double value, const std::string& allowed);
 
 /// Runs one case; returns the summary (keys: model,
 /// load, regime, particles, shell_nodes, probe_0_75 and probe_0_4351 with

@@ -10,7 +10,7 @@
 
 namespace dembridge::demo
 {
-void bad(const std::string& what, double value, const std::string& allowed)
+void refuse_value(const std::string& what, double value, const std::string& allowed)
 {
   std::ostringstream s;
   s << what << " " << value << ": allowed is " << allowed;
@@ -26,24 +26,24 @@ void check_config(const BarConfig& c)
   if (c.regime != "static" && c.regime != "dynamic")
     throw std::runtime_error("regime '" + c.regime + "': allowed are static, dynamic");
   if (!(c.length > 0.0))
-    bad("length [m]", c.length, "> 0");
+    refuse_value("length [m]", c.length, "> 0");
   if (!(c.width > 0.0 && c.width < c.length))
-    bad("width [m]", c.width, "in (0, length)");
+    refuse_value("width [m]", c.width, "in (0, length)");
   if (!(c.fe_size > 0.0 && c.fe_size <= c.width))
-    bad("fe-size [m]", c.fe_size, "in (0, width]");
+    refuse_value("fe-size [m]", c.fe_size, "in (0, width]");
   if (!(c.mean_radius > 0.0 && c.mean_radius < 0.1 * c.width))
-    bad("mean-radius [m]", c.mean_radius, "in (0, width / 10)");
+    refuse_value("mean-radius [m]", c.mean_radius, "in (0, width / 10)");
   if (c.overlap_layers < 1)
-    bad("overlap-layers", c.overlap_layers, ">= 1");
+    refuse_value("overlap-layers", c.overlap_layers, ">= 1");
   if (!(c.safety > 0.0 && c.safety <= 0.95))
-    bad("safety-factor", c.safety, "in (0, 0.95] (the critical step is a power-iteration estimate, from below)");
+    refuse_value("safety-factor", c.safety, "in (0, 0.95] (the critical step is a power-iteration estimate, from below)");
   if (c.damping >= 0.0 && !std::isfinite(c.damping))
-    bad("damping [1/s]", c.damping, "finite, >= 0 (or < 0 for the default)");
+    refuse_value("damping [1/s]", c.damping, "finite, >= 0 (or < 0 for the default)");
   for (double p : {c.probe_de, c.probe_overlap, c.probe_overlap_fe})
     if (!(p > 0.0 && p < c.length))
-      bad("probe position [m]", p, "in (0, length)");
+      refuse_value("probe position [m]", p, "in (0, length)");
   if (c.frames < 1)
-    bad("frames", c.frames, ">= 1");
+    refuse_value("frames", c.frames, ">= 1");
 }
 
 double measured_modulus(const nlohmann::json& run)

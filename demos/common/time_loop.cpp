@@ -21,7 +21,7 @@ LoopEnd run_time_loop(const LoopPlan& plan, const LoopHooks& hooks)
     throw std::logic_error("run_time_loop: the step and time hooks are required");
   const Stopwatch clock;
   double printed = -1e300; // a wall-clock cadence prints at the first step
-  LoopEnd end{plan.done, hooks.finished && hooks.finished(plan.done), 0.0};
+  LoopEnd end{plan.done, hooks.finished && hooks.finished(plan.done)};
   for (std::int64_t k = plan.done + 1; k <= plan.last && !end.finished; ++k)
   {
     hooks.step(k);
@@ -47,7 +47,6 @@ LoopEnd run_time_loop(const LoopPlan& plan, const LoopHooks& hooks)
     else
       check_stop(hooks.time());
   }
-  end.wall_s = clock.seconds();
   return end;
 }
 

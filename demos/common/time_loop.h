@@ -67,7 +67,6 @@ struct LoopEnd
 {
   std::int64_t steps = 0; ///< the steps done when the loop ended
   bool finished = false;  ///< ended by `finished` (else by the step limit)
-  double wall_s = 0.0;    ///< wall-clock seconds in the loop
 };
 
 /// How every run starts its loop: from its checkpoint (`resume`) when it

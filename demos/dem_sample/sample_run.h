@@ -429,6 +429,13 @@ private:
             "work_j,imbalance_j,gauge_strain,top_reaction_n,lateral_stress_pa\n";
   }
 
+  /// The curves, by their names in the checkpoint's /run group.
+  std::array<std::pair<const char*, std::vector<double>*>, 5> curves()
+  {
+    return {{{"strain", &_eps}, {"stress", &_sig}, {"lateral_strain", &_lat}, {"gauge_strain", &_ax},
+             {"lateral_stress", &_conf}}};
+  }
+
   /// Continues from the checkpoint: the solver's state, the curves and
   /// what is tracked along them, and the output files up to the checkpoint.
   void resume()
@@ -437,11 +444,8 @@ private:
     const auto root = file.root();
     _solver->load(root.group("dem"));
     const auto run = root.group("run");
-    run.read("strain", _eps);
-    run.read("stress", _sig);
-    run.read("lateral_strain", _lat);
-    run.read("gauge_strain", _ax);
-    run.read("lateral_stress", _conf);
+    for (const auto& [name, curve] : curves())
+      run.read(name, *curve);
     std::vector<double> tracked;
     run.read("tracked", tracked);
     if (tracked.size() != 11)
@@ -471,11 +475,8 @@ private:
   {
     _solver->save(root.group("dem"));
     const auto run = root.group("run");
-    run.write("strain", _eps);
-    run.write("stress", _sig);
-    run.write("lateral_strain", _lat);
-    run.write("gauge_strain", _ax);
-    run.write("lateral_stress", _conf);
+    for (const auto& [name, curve] : curves())
+      run.write(name, *curve);
     run.write("tracked", std::vector<double>{_peak, _eps_peak, _dissipated_at_peak, _demand_at_peak,
                                              _after_peak ? 1.0 : 0.0, _separated ? 1.0 : 0.0, _t_low,
                                              _axial_at_peak, _lateral_at_peak, _confined ? 1.0 : 0.0,

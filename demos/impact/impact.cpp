@@ -400,7 +400,6 @@ private:
     _max_depth = tracked[0];
     _touched = tracked[1] != 0.0;
     _peak_force = tracked[2];
-    _next_frame = run.read_int("next_frame");
     _out["restarted_from_step"] = _solver->steps();
     if (_cfg.output_dir.empty())
       return;
@@ -413,7 +412,6 @@ private:
     _solver->save(root.group("dem"));
     const auto run = root.group("run");
     run.write("tracked", std::vector<double>{_max_depth, _touched ? 1.0 : 0.0, _peak_force});
-    run.write_int("next_frame", _next_frame);
     if (_writer)
       _writer->save(root.group("particles_xdmf"));
     if (_bar_writer)
@@ -528,11 +526,7 @@ private:
     };
     h.row = [this](std::int64_t, bool) { write_row(); };
     if (_writer)
-      h.frame = [this, frame_every](std::int64_t k, bool)
-      {
-        write_frame();
-        _next_frame = k / frame_every; // frames fall on its multiples, and at the end
-      };
+      h.frame = [this](std::int64_t, bool) { write_frame(); };
     if (!_cfg.quiet)
       h.progress = [this](std::int64_t, bool) { progress(); };
     h.save = [this](const checkpoint::Group& g) { save(g); };
@@ -689,7 +683,7 @@ private:
   RigidBody _body;
   double _ke0 = 0.0;
   double _dt = 0.0, _dt_crit = 0.0, _duration = 0.0, _crossing = 0.0;
-  std::int64_t _nsteps = 0, _crossing_steps = 1, _history_every = 1, _next_frame = 0;
+  std::int64_t _nsteps = 0, _crossing_steps = 1, _history_every = 1;
   std::size_t _supported = 0;
   std::unique_ptr<DemSolver> _solver;
   std::unique_ptr<Checkpointer> _ckpt;
