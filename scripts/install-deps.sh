@@ -7,7 +7,7 @@
 set -eu
 PKGS="cmake make g++ pkg-config libdolfinx-dev python3-ffcx libpetsc-real-dev
 libeigen3-dev catch2 libhdf5-mpi-dev libcli11-dev libspdlog-dev nlohmann-json3-dev
-python3-matplotlib python3-h5py libtomlplusplus-dev"
+python3-matplotlib python3-h5py libtomlplusplus-dev libgmsh-dev"
 [ "${1:-}" = "--test" ] && PKGS="$PKGS paraview python3-paraview"
 missing=""
 for p in $PKGS; do

@@ -73,7 +73,7 @@ TEST_CASE("coupled bar: constraint after every step, energy kept", "[bridge][cou
   {
     auto b = make_bar(cell);
     bridge::CouplingOptions o;
-    o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08}; // eta = 1 at x <= 0.08, 0 at x >= 0.12
+    o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, 0.12, 0.08}; // eta = 1 at x <= 0.08, 0 at x >= 0.12
     bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
     REQUIRE(s.constrained() > 0);
     CHECK(s.coupling().outside() == 0);
@@ -204,7 +204,7 @@ TEST_CASE("critical time steps by power iteration: stable below, unstable above"
     auto b = make_bar(shell::Cell::quadrilateral);
     random_velocities(b.p);
     bridge::CouplingOptions o;
-    o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
+    o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, 0.12, 0.08};
     const double dt_c = bridge::CoupledSolver(*b.fe, b.p, b.l, b.mat, o).dt_coupled();
     o.dt = 0.97 * dt_c; // beyond the safety factors allowed (0.95), within the estimate
     bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
@@ -242,7 +242,7 @@ TEST_CASE("energy guards: unstable DE and coupled runs stop on their energy, bef
     auto b = make_bar(shell::Cell::quadrilateral);
     random_velocities(b.p);
     bridge::CouplingOptions o;
-    o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
+    o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, 0.12, 0.08};
     bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
     s.start(std::vector<double>(b.fe->num_dofs(), 0.0), std::vector<double>(b.fe->num_dofs(), 0.0));
     for (int k = 0; k < 150; ++k)
@@ -262,12 +262,29 @@ TEST_CASE("coupled solver: bad set-ups are refused", "[bridge][coupled][errors]"
 {
   auto b = make_bar(shell::Cell::quadrilateral);
   bridge::CouplingOptions o;
-  o.overlap = {{1.0, 0.0, 0.0}, 0.5, 0.4}; // beyond both regions
+  o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, 0.5, 0.4}; // beyond both regions
   CHECK_THROWS_WITH(bridge::CoupledSolver(*b.fe, b.p, b.l, b.mat, o), Contains("overlap"));
   auto c = make_bar(shell::Cell::quadrilateral);
-  o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
+  o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, 0.12, 0.08};
   o.dt = 1.0;
   CHECK_THROWS_WITH(bridge::CoupledSolver(*c.fe, c.p, c.l, c.mat, o), Contains("above the coupled estimate"));
+  // spheres past the band's FE edge (x < 0.10 here: weight 1, the shell's
+  // alone) are refused, counted and located, the caller's masses given back
+  auto d = make_bar(shell::Cell::quadrilateral);
+  o.dt = 0.0;
+  o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, 0.12, 0.10};
+  std::size_t past = 0;
+  for (std::size_t i = 0; i < d.p.size(); ++i)
+    past += d.p.x[3 * i] < 0.10;
+  REQUIRE(past > 0);
+  const auto masses = d.p.m;
+  CHECK_THROWS_WITH(bridge::CoupledSolver(*d.fe, d.p, d.l, d.mat, o),
+                    Contains(std::to_string(past) + " of the " + std::to_string(d.p.size()) + " spheres lie beyond the overlap on the FE side")
+                        && Contains("planar overlap from 0.12 m (DE side) to 0.1 m (FE side)"));
+  CHECK(d.p.m == masses);
+  // the same with a box core: the spheres round the core's corner, past its band
+  o.overlap = bridge::Overlap::box({0.16, 0.025}, {0.04, 1.0}, 0.02);
+  CHECK_THROWS_WITH(bridge::CoupledSolver(*d.fe, d.p, d.l, d.mat, o), Contains("box core"));
 }
 
 TEST_CASE("coupled solver: it holds the caller's weighted state and gives it back", "[bridge][coupled]")
@@ -289,7 +306,7 @@ TEST_CASE("coupled solver: it holds the caller's weighted state and gives it bac
     CHECK(std::all_of(eta.begin(), eta.end(), [](double e) { return e == 1.0; }));
   };
   bridge::CouplingOptions o;
-  o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
+  o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, 0.12, 0.08};
   {
     bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
     CHECK(b.p.m != m0); // the overlap's and the shell side's spheres are lighter
@@ -366,7 +383,7 @@ TEST_CASE("coupled patch test: a uniform velocity is carried unchanged", "[bridg
   // needed, and every velocity stays V (1e-10 relative).
   auto b = make_bar(shell::Cell::quadrilateral);
   bridge::CouplingOptions o;
-  o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
+  o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, 0.12, 0.08};
   bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
   const std::array<double, 3> V{0.3, -0.2, 0.1};
   std::vector<double> u(b.fe->num_dofs(), 0.0), v(b.fe->num_dofs(), 0.0);
@@ -474,7 +491,7 @@ TEST_CASE("coupled patch test: a rigid rotation is carried by both sides", "[bri
     b.p = p0;
     dem::Links l = b.l;
     bridge::CouplingOptions o;
-    o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
+    o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, 0.12, 0.08};
     bridge::CoupledSolver s(*b.fe, b.p, l, b.mat, o);
     const std::array<double, 3> om{0.2 * scale, -0.1 * scale, 0.3 * scale}, c{0.1, 0.02, 0.0};
     auto rigid = [&](const double* x)
@@ -558,7 +575,7 @@ TEST_CASE("coupled bar: energy kept over 20 periods", "[bridge][coupled]")
   // the first axial mode: total energy within 0.5 % (the required bound)
   auto b = make_bar(shell::Cell::quadrilateral);
   bridge::CouplingOptions o;
-  o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
+  o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, 0.12, 0.08};
   bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
   const auto x = b.fe->node_coordinates();
   const auto clamp = clamp_dofs(*b.fe, [](const auto& q) { return q[0] < 1e-9; });
@@ -615,7 +632,7 @@ std::pair<double, double> pulse(bool fe_to_de)
   auto p = dem::make_particles(pk.x, pk.r, mat.density, solid / region.volume);
   auto l = dem::create_links(p, dem::lambda_for_mean_links(p.x, p.r, 12.0), mat);
   bridge::CouplingOptions o;
-  o.overlap = {{1.0, 0.0, 0.0}, xfe, xde};
+  o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, xfe, xde};
   bridge::CoupledSolver s(fe, p, l, mat, o);
   // bell u(x) = A (1 + cos(2 pi (x - x0) / lp)) / 2 on |x - x0| < lp / 2,
   // travelling towards the other side: v = -+ c du/dx
@@ -754,7 +771,7 @@ TEST_CASE("the coupled model rotated and moved in space gives the same results",
     const std::array<double, 3> ax{place.rotation[0], place.rotation[3], place.rotation[6]};
     const double s0 = ax[0] * place.origin[0] + ax[1] * place.origin[1] + ax[2] * place.origin[2];
     bridge::CouplingOptions o;
-    o.overlap = {ax, s0 + 0.12, s0 + 0.08};
+    o.overlap = bridge::PlanarOverlap{ax, s0 + 0.12, s0 + 0.08};
     o.dt = 1e-7;
     bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
     const auto x = b.fe->node_coordinates();
@@ -809,7 +826,7 @@ TEST_CASE("coupled step: skipping the full-step projection leaves the motion unc
   {
     auto b = make_bar(shell::Cell::quadrilateral);
     bridge::CouplingOptions o;
-    o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
+    o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, 0.12, 0.08};
     o.damping_fe = o.damping_de = c;
     bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
     const int bs = b.fe->block_size();
@@ -879,7 +896,7 @@ TEST_CASE("restart: a coupled run continued from a checkpoint is the uninterrupt
     Run()
     {
       bridge::CouplingOptions o;
-      o.overlap = {{1.0, 0.0, 0.0}, 0.12, 0.08};
+      o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, 0.12, 0.08};
       o.damping_fe = o.damping_de = 2000.0;
       s = std::make_unique<bridge::CoupledSolver>(*b.fe, b.p, b.l, b.mat, o);
       const int bs = b.fe->block_size();

@@ -144,6 +144,7 @@ void CoupledSolver::weigh_de(const CouplingOptions& o)
   }
   if (_ids.empty())
     throw std::runtime_error("no particle lies in the overlap: the DE and FE regions must overlap");
+  refuse_beyond(o.overlap);
   _l.weight.resize(_l.size());
   for (std::size_t k = 0; k < _l.size(); ++k)
   {
@@ -152,6 +153,36 @@ void CoupledSolver::weigh_de(const CouplingOptions& o)
       mid[d] = 0.5 * (_p.x[3 * _l.a[k] + d] + _p.x[3 * _l.b[k] + d]);
     _l.weight[k] = 1.0 - o.overlap.weight(mid);
   }
+}
+
+void CoupledSolver::refuse_beyond(const Overlap& overlap) const
+{
+  // spheres past the band on the FE side have weight 0 and floored masses:
+  // they add nothing to the model but shrink the coupled step
+  std::size_t n = 0;
+  double worst = -1.0;
+  std::array<double, 3> at{0, 0, 0};
+  for (std::size_t i = 0; i < _p.size(); ++i)
+  {
+    const std::array<double, 3> xi{_p.x[3 * i], _p.x[3 * i + 1], _p.x[3 * i + 2]};
+    if (!overlap.beyond(xi))
+      continue;
+    ++n;
+    const double past = overlap.distance(xi) - overlap.width();
+    if (past > worst)
+    {
+      worst = past;
+      at = xi;
+    }
+  }
+  if (n == 0)
+    return;
+  std::ostringstream m;
+  m << n << " of the " << _p.size() << " spheres lie beyond the overlap on the FE side (weight 1: the shells alone "
+    << "carry the structure there), up to " << worst << " m past its FE edge, the farthest at (" << at[0] << ", "
+    << at[1] << ", " << at[2] << ") m; the overlap is " << overlap.what()
+    << ". Keep the spheres within the DE core and the band: they would only shrink the coupled time step";
+  throw std::runtime_error(m.str());
 }
 
 void CoupledSolver::locate_overlap()

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "addons.h"
 #include "force_loop.h"
 #include "threads.h"
 
@@ -87,29 +88,15 @@ void DemSolver::remove_escaped()
   auto stored_energy = [&]
   {
     double e = elastic_energy(_p, _l, _nl, _mat);
-    for (std::size_t k = 0; k < _bodies.size(); ++k)
-      e += body_contact_energy(_p, _bodies[k], _contacts[k], _mat);
+    for (const auto& a : _addons)
+      a->stored_energy(view(), e);
     return e;
   };
   const double before = stored_energy();
   for (auto i : gone)
     _removed[i] = 1;
-  for (auto& c : _contacts)
-  {
-    // their contacts with the bodies end (and they are examined no more)
-    std::size_t kept = 0;
-    for (std::size_t h = 0; h < c.ids.size(); ++h)
-      if (!_removed[c.ids[h]])
-      {
-        c.ids[kept] = c.ids[h];
-        for (int k = 0; k < 3; ++k)
-          c.fs[3 * kept + k] = c.fs[3 * h + k];
-        ++kept;
-      }
-    c.ids.resize(kept);
-    c.fs.resize(3 * kept);
-    std::erase_if(c.near, [&](std::int32_t i) { return _removed[i] != 0; });
-  }
+  for (const auto& a : _addons)
+    a->spheres_removed(view());
   for (std::size_t k = 0; k < _l.size(); ++k)
     if (_l.state[k] == LinkState::intact && (_removed[_l.a[k]] || _removed[_l.b[k]]))
       _l.state[k] = LinkState::removed;
@@ -185,95 +172,17 @@ void DemSolver::start()
 {
   _nl.update(_p.x, _p.r, _l, _removed);
   compute_forces(_p, _l, _nl, _mat, 0.0, _counters, *_scratch);
-  contact_bodies(0.0);
-  if (_has_bars)
-  {
-    bar_forces(_bars, _p, false);
-    refresh_bar_contacts(_bars, _p, _bar_contacts, _nl, _removed);
-    bar_contact_forces(_bars, _p, _bar_contacts, _mat, _removed);
-    for (auto& b : _bodies)
-      bar_body_forces(_bars, b);
-  }
+  if (_bars)
+    _bars->touch(_bodies ? &_bodies->bodies : nullptr);
+  for (const auto& a : _addons)
+    a->start(view());
   if (!_forces.empty())
     external(_forces, _t, _fext);
   _e = DemEnergy{};
-  for (auto& c : _contacts)
-    c.friction_work = 0.0;
   const DemEnergy e = energy();
   _e.initial = e.kinetic + e.elastic + e.body_kinetic + e.body_contact + e.bar_kinetic + e.bar_elastic
-               + e.bar_plastic + e.bar_opening;
+               + e.bar_plastic + e.bar_opening + e.addons;
   _started = true;
-}
-
-std::size_t DemSolver::add_body(RigidBody b)
-{
-  if (_started)
-    throw std::runtime_error("rigid body '" + b.name + "': bodies are added before start()");
-  if (b.name.empty() || b.name[0] == '.' || b.name.find('/') != std::string::npos)
-    throw std::runtime_error("rigid body '" + b.name + "': a name must be non-empty, without '/', not starting with '.'");
-  b.shape.validate();
-  for (const auto& o : _bodies)
-    if (o.name == b.name)
-      throw std::runtime_error("rigid body '" + b.name + "': the name is in use");
-  if (!b.fixed && (!(b.mass > 0.0) || !(b.inertia[0] > 0.0 && b.inertia[1] > 0.0 && b.inertia[2] > 0.0)))
-    throw std::runtime_error("rigid body '" + b.name + "': a moving body needs a mass and inertias > 0");
-  if (!(b.friction >= 0.0) || !std::isfinite(b.friction))
-    throw std::runtime_error("rigid body '" + b.name + "': friction " + std::to_string(b.friction) + " must be >= 0");
-  if (b.shape.kind != Shape::Kind::projectile)
-    b.fixed = true; // planes and boxes are walls
-  _bodies.push_back(std::move(b));
-  _contacts.emplace_back();
-  return _bodies.size() - 1;
-}
-
-void DemSolver::contact_bodies(double dt)
-{
-  for (std::size_t k = 0; k < _bodies.size(); ++k)
-    body_forces(_p, _bodies[k], _contacts[k], _nl, _mat, dt);
-}
-
-void DemSolver::kick_bodies(double h)
-{
-  for (auto& b : _bodies)
-    if (!b.fixed)
-      for (int k = 0; k < 3; ++k)
-      {
-        b.v[k] += h * b.f[k] / b.mass;
-        b.L[k] += h * b.t[k];
-      }
-}
-
-void DemSolver::drift_bodies()
-{
-  // x += dt v; R <- exp(dt [omega]) R (Rodrigues), omega from L(n+1/2)
-  for (auto& b : _bodies)
-  {
-    if (b.fixed)
-      continue;
-    const auto w = b.omega();
-    for (int k = 0; k < 3; ++k)
-      b.x[k] += _dt * b.v[k];
-    const double wn = std::sqrt(dot3(w.data(), w.data())), th = wn * _dt;
-    if (!(th > 0.0))
-      continue;
-    const double u[3] = {w[0] / wn, w[1] / wn, w[2] / wn}, s = std::sin(th), c = 1.0 - std::cos(th);
-    const double K[9] = {0, -u[2], u[1], u[2], 0, -u[0], -u[1], u[0], 0};
-    double Q[9];
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-      {
-        double kk = 0.0;
-        for (int q = 0; q < 3; ++q)
-          kk += K[3 * i + q] * K[3 * q + j];
-        Q[3 * i + j] = (i == j ? 1.0 : 0.0) + s * K[3 * i + j] + c * kk;
-      }
-    std::array<double, 9> R{};
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        for (int q = 0; q < 3; ++q)
-          R[3 * i + j] += Q[3 * i + q] * b.R[3 * q + j];
-    b.R = R;
-  }
 }
 
 void DemSolver::kick(double h)
@@ -312,12 +221,11 @@ void DemSolver::begin_step()
     _fold[q] = _p.f[d] + (_fext.empty() ? 0.0 : _fext[d]);
     _vold[q] = _p.v[d];
   }
-  for (std::size_t q = 0; q < _bar_moved.size(); ++q)
-    for (int k = 0; k < 3; ++k)
-      _bar_fold[3 * q + k] = _bars.f[3 * _bar_moved[q] + k];
+  for (const auto& a : _addons)
+    a->begin(view());
   kick(0.5 * dt);
-  kick_bodies(0.5 * dt);
-  kick_bars(0.5 * dt);
+  for (const auto& a : _addons)
+    a->kick(view(), 0.5 * dt);
   tie_plates();
   for (const auto& m : _motions)
   {
@@ -422,24 +330,8 @@ void DemSolver::check_finite() const
 #pragma omp parallel for schedule(static) reduction(+ : check) num_threads(impl::threads_for(n))
   for (std::size_t i = 0; i < 3 * n; ++i)
     check += _p.x[i] + _p.v[i] + _p.w[i];
-  for (const auto& b : _bodies)
-    for (int k = 0; k < 3; ++k)
-      if (!std::isfinite(b.x[k]) || !std::isfinite(b.v[k]) || !std::isfinite(b.L[k]))
-      {
-        std::ostringstream s;
-        s << "non-finite position or velocity of the rigid body '" << b.name << "' at t = " << _t << " s (step "
-          << _steps << "): the run is unstable; reduce the time step";
-        throw std::runtime_error(s.str());
-      }
-  for (std::size_t q = 0; q < _bars.nodes(); ++q)
-    for (int k = 0; k < 3; ++k)
-      if (!std::isfinite(_bars.x[3 * q + k]) || !std::isfinite(_bars.v[3 * q + k]))
-      {
-        std::ostringstream s;
-        s << "non-finite position or velocity of bar node " << q << " at t = " << _t << " s (step " << _steps
-          << "): the run is unstable; reduce the time step";
-        throw std::runtime_error(s.str());
-      }
+  for (const auto& a : _addons)
+    a->check_finite(_t, _steps);
   if (std::isfinite(check))
     return;
   std::size_t bad = 0;
@@ -462,15 +354,16 @@ void DemSolver::end_step()
   if (!_forces.empty())
     external(_forces, t_new, _fext);
   const Drift moved = drift();
-  drift_bodies();
-  const double w_damp_bars = drift_bars();
+  double w_damp_addons = 0.0;
+  for (const auto& a : _addons)
+    w_damp_addons += a->drift(view());
   // fragments leave here, between the drift and the forces: both halves of
   // a kick with a force between a leaving sphere and another then act on
   // both (the first, F(n), before; the second, F(n+1), not at all), so
   // momentum is kept exactly
   if (_domain_set)
     remove_escaped();
-  const double w_ext = moved.external_work, w_damp = moved.damping + w_damp_bars;
+  const double w_ext = moved.external_work, w_damp = moved.damping + w_damp_addons;
   const double t1 = omp_get_wtime();
   // the movers' pairs are merged with the pairs of the links the force loop
   // breaks, in one pass (compute_forces: add_broken_links)
@@ -478,34 +371,24 @@ void DemSolver::end_step()
   const double t2 = omp_get_wtime();
   const double contacts_before = _counters.contact_seconds, merge_before = _counters.neighbour_seconds;
   compute_forces(_p, _l, _nl, _mat, dt, _counters, *_scratch);
-  const double t25 = omp_get_wtime();
-  contact_bodies(dt);
   const double t3 = omp_get_wtime();
-  if (_has_bars)
+  for (const auto& a : _addons)
   {
-    _bar_open_old.assign(_bars.open.begin(), _bars.open.end());
-    _bar_broken_old.assign(_bars.broken.begin(), _bars.broken.end());
-    const BarWork bw = bar_forces(_bars, _p, true, _removed);
-    _e.bar_slip += bw.slip;
-    _e.bar_broken += bw.broken;
-    refresh_bar_contacts(_bars, _p, _bar_contacts, _nl, _removed);
-    if (bw.changed)
-      _e.bar_broken += bar_contact_jump();
-    bar_contact_forces(_bars, _p, _bar_contacts, _mat, _removed);
-    for (auto& b : _bodies)
-      bar_body_forces(_bars, b);
+    const double ta = omp_get_wtime();
+    a->forces(view(), _e);
+    _time.*(a->time_slot()) += omp_get_wtime() - ta;
   }
   const double t4 = omp_get_wtime();
   const double merge = _counters.neighbour_seconds - merge_before; // the list's merge in the force loop
   _time.neighbours += t2 - t1 + merge;
-  _time.forces += t25 - t2 - merge;
+  _time.forces += t3 - t2 - merge;
   _time.contacts += _counters.contact_seconds - contacts_before;
-  _time.bodies += t3 - t25;
-  _time.bars += t4 - t3;
-  const double w_presc = held_reactions() + bar_reactions();
+  double w_presc = held_reactions();
+  for (const auto& a : _addons)
+    w_presc += a->reactions(view());
   kick(0.5 * dt);
-  kick_bodies(0.5 * dt);
-  kick_bars(0.5 * dt);
+  for (const auto& a : _addons)
+    a->kick(view(), 0.5 * dt);
   tie_plates();
   for (const auto& m : _motions)
     if (m.kind == MotionKind::velocity && !m.hinged())
@@ -536,7 +419,7 @@ void DemSolver::end_step()
     if (_guard.due(_steps))
       check_energy();
   }
-  _time.integration += (t1 - t0) + (omp_get_wtime() - t3);
+  _time.integration += (t1 - t0) + (omp_get_wtime() - t4);
 }
 
 void DemSolver::check_energy() const
@@ -544,7 +427,7 @@ void DemSolver::check_energy() const
   const DemEnergy e = energy();
   const double work = e.external_work + e.prescribed_work;
   const double scale = e.initial + std::abs(e.external_work) + std::abs(e.prescribed_work) + e.kinetic + e.elastic
-                       + e.body_kinetic + e.body_contact + e.bar_kinetic + e.bar_elastic;
+                       + e.body_kinetic + e.body_contact + e.bar_kinetic + e.bar_elastic + std::abs(e.addons);
   _guard.check({_t, _steps, "the energy", "kinetic + elastic", e.kinetic + e.elastic, e.initial, work, e.imbalance(),
                 scale});
 }
@@ -577,20 +460,8 @@ DemEnergy DemSolver::energy() const
   e.compaction = compaction_energy(_l, _mat);
   e.breakage = _counters.breakage;
   e.friction = _counters.friction;
-  e.body_kinetic = e.body_contact = e.body_friction = 0.0;
-  for (std::size_t k = 0; k < _bodies.size(); ++k)
-  {
-    e.body_kinetic += _bodies[k].kinetic_energy();
-    e.body_contact += body_contact_energy(_p, _bodies[k], _contacts[k], _mat);
-    if (_has_bars)
-      e.body_contact += bar_body_energy(_bars, _bodies[k]);
-    e.body_friction += _contacts[k].friction_work;
-  }
-  const BarEnergy be = bar_energy(_bars, _p);
-  e.bar_kinetic = be.kinetic;
-  e.bar_elastic = be.elastic + (_has_bars ? bar_contact_energy(_bars, _p, _bar_contacts, _mat, _removed) : 0.0);
-  e.bar_plastic = be.plastic;
-  e.bar_opening = be.opening;
+  for (const auto& a : _addons)
+    a->energy(view(), e);
   return e;
 }
 

@@ -166,62 +166,6 @@ void NeighbourList::load(const Group& g)
 
 // ---- DemSolver ------------------------------------------------------------------
 
-void DemSolver::save_bodies(const Group& g) const
-{
-  std::string names;
-  for (const auto& b : _bodies)
-    names += b.name + '\n';
-  g.write("names", names);
-  for (std::size_t k = 0; k < _bodies.size(); ++k)
-  {
-    const RigidBody& b = _bodies[k];
-    const BodyContacts& c = _contacts[k];
-    const Group h = g.group(b.name);
-    h.write("mass", b.mass);
-    for (auto [name, v] : {std::pair{"x", &b.x}, {"v", &b.v}, {"L", &b.L}, {"f", &b.f}, {"t", &b.t},
-                           {"x_refresh", &c.x_refresh}})
-      h.write(name, std::span<const double>(v->data(), 3));
-    h.write("R", std::span<const double>(b.R.data(), 9));
-    h.write("R_refresh", std::span<const double>(c.R_refresh.data(), 9));
-    h.write("contacts", c.ids);
-    h.write("shear", c.fs);
-    h.write("near", c.near);
-    h.write_int("version", static_cast<std::int64_t>(c.version));
-    h.write_int("refreshed", c.refreshed ? 1 : 0);
-    h.write("friction_work", c.friction_work);
-  }
-}
-
-void DemSolver::load_bodies(const Group& g)
-{
-  std::string names;
-  for (const auto& b : _bodies)
-    names += b.name + '\n';
-  if (g.read_string("names") != names)
-    g.fail("names", "the rigid bodies differ from this run's (another set-up)");
-  for (std::size_t k = 0; k < _bodies.size(); ++k)
-  {
-    RigidBody& b = _bodies[k];
-    BodyContacts& c = _contacts[k];
-    const Group h = g.group(b.name);
-    if (h.read_double("mass") != b.mass)
-      h.fail("mass", "differs from this run's body '" + b.name + "'");
-    for (auto [name, v] : {std::pair{"x", &b.x}, {"v", &b.v}, {"L", &b.L}, {"f", &b.f}, {"t", &b.t},
-                           {"x_refresh", &c.x_refresh}})
-      h.read_exact(name, std::span<double>(v->data(), 3));
-    h.read_exact("R", std::span<double>(b.R.data(), 9));
-    h.read_exact("R_refresh", std::span<double>(c.R_refresh.data(), 9));
-    h.read("contacts", c.ids);
-    h.read("shear", c.fs);
-    h.read("near", c.near);
-    if (c.fs.size() != 3 * c.ids.size())
-      h.fail("shear", "not 3 values per contact (file damaged?)");
-    c.version = static_cast<std::size_t>(h.read_int("version"));
-    c.refreshed = h.read_int("refreshed") != 0;
-    c.friction_work = h.read_double("friction_work");
-  }
-}
-
 void DemSolver::save(const Group& g) const
 {
   if (_in_step)
@@ -255,8 +199,7 @@ void DemSolver::save(const Group& g) const
       hinged.push_back(_motion_vprev[q][k]);
     }
   g.write("hinged", hinged);
-  save_bodies(g.group("bodies"));
-  save_bars(g.group("bars"));
+  save_addons(g);
   g.write("removed", _removed);
   g.write("removed_totals", std::vector<double>{double(_gone.count), _gone.mass, _gone.momentum[0], _gone.momentum[1],
                                                 _gone.momentum[2], _gone.kinetic, _gone.elastic});
@@ -315,8 +258,7 @@ void DemSolver::load(const Group& g)
       _motion_reac[q][k] = hinged[6 * q + 2 * k];
       _motion_vprev[q][k] = hinged[6 * q + 2 * k + 1];
     }
-  load_bodies(g.group("bodies"));
-  load_bars(g.group("bars"));
+  load_addons(g);
 
   // the force loop's index structures are rebuilt for the loaded pairs
   _scratch = std::make_unique<ForceScratch>();

@@ -245,7 +245,7 @@ private:
     if (_c.model == "coupled")
     {
       bridge::CouplingOptions o;
-      o.overlap = {{1.0, 0.0, 0.0}, _fe_end, _de_start};
+      o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, _fe_end, _de_start};
       o.safety = _c.safety;
       o.damping_fe = o.damping_de = _damping;
       _coupled = std::make_unique<bridge::CoupledSolver>(*_fe, _p, _links, _mat, o);

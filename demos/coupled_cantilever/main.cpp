@@ -154,7 +154,7 @@ private:
   void couple()
   {
     bridge::CouplingOptions o;
-    o.overlap = {{1.0, 0.0, 0.0}, _c.fe_length, _c.de_start};
+    o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, _c.fe_length, _c.de_start};
     o.safety = _c.safety;
     _s = std::make_unique<bridge::CoupledSolver>(*_fe, _p, _links, _mat, o);
     const auto& s = *_s;

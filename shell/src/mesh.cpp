@@ -1,4 +1,5 @@
 #include "dembridge/shell/mesh.h"
+#include "mesh_internal.h"
 
 #include <cmath>
 #include <dolfinx/fem/CoordinateElement.h>
@@ -6,7 +7,10 @@
 #include <dolfinx/io/XDMFFile.h>
 #include <dolfinx/mesh/Mesh.h>
 #include <dolfinx/mesh/generation.h>
+#include <functional>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 namespace dembridge::shell
 {
@@ -84,29 +88,39 @@ void check_lengths(std::initializer_list<double> l)
 }
 } // namespace
 
-std::shared_ptr<dolfinx::mesh::Mesh>
-create_shell_rectangle(MPI_Comm comm, double lx, double ly, int nx, int ny,
-                       Cell cell, const Placement& p)
+std::shared_ptr<dolfinx::mesh::Mesh> impl::shell_mesh(MPI_Comm comm, std::vector<double> x,
+                                                      std::vector<std::int64_t> cells, Cell cell)
+{
+  const int npc = cell == Cell::triangle ? 3 : 4;
+  const auto ct = cell == Cell::triangle ? dolfinx::mesh::CellType::triangle : dolfinx::mesh::CellType::quadrilateral;
+  auto adj = dolfinx::graph::regular_adjacency_list(std::move(cells), npc);
+  const std::size_t nn = x.size() / 3;
+  return std::make_shared<dolfinx::mesh::Mesh>(dolfinx::mesh::create_mesh(
+      comm, adj, dolfinx::fem::CoordinateElement(ct, 1), x, {nn, 3},
+      dolfinx::mesh::GhostMode::none));
+}
+
+namespace
+{
+/// The structured nx x ny grid of [0, lx] x [0, ly], its cells (i, j) kept
+/// where keep(i, j), the vertices of no kept cell left out (the others in
+/// their grid order), placed by p.
+std::shared_ptr<dolfinx::mesh::Mesh> structured_shell(MPI_Comm comm, double lx, double ly, int nx, int ny, Cell cell,
+                                                      const Placement& p,
+                                                      const std::function<bool(int, int)>& keep)
 {
   check_divisions({nx, ny});
   check_lengths({lx, ly});
   if (cell != Cell::triangle && cell != Cell::quadrilateral)
     throw std::runtime_error("a shell mesh needs triangles or quadrilaterals, not "
                              + to_string(cell));
-  std::vector<double> x;
-  x.reserve(3 * (nx + 1) * (ny + 1));
-  for (int j = 0; j <= ny; ++j)
-    for (int i = 0; i <= nx; ++i)
-    {
-      const auto y = p.apply({lx * i / nx, ly * j / ny, 0.0});
-      x.insert(x.end(), y.begin(), y.end());
-    }
   auto id = [nx](int i, int j) { return std::int64_t(j) * (nx + 1) + i; };
   std::vector<std::int64_t> cells;
-  int npc = 4;
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i)
     {
+      if (!keep(i, j))
+        continue;
       const std::int64_t v00 = id(i, j), v10 = id(i + 1, j), v01 = id(i, j + 1),
                          v11 = id(i + 1, j + 1);
       if (cell == Cell::quadrilateral)
@@ -116,17 +130,62 @@ create_shell_rectangle(MPI_Comm comm, double lx, double ly, int nx, int ny,
       else
         cells.insert(cells.end(), {v00, v10, v01, v10, v11, v01});
     }
-  dolfinx::mesh::CellType ct = dolfinx::mesh::CellType::quadrilateral;
-  if (cell == Cell::triangle)
-  {
-    npc = 3;
-    ct = dolfinx::mesh::CellType::triangle;
-  }
-  auto adj = dolfinx::graph::regular_adjacency_list(std::move(cells), npc);
-  const std::size_t nn = x.size() / 3;
-  return std::make_shared<dolfinx::mesh::Mesh>(dolfinx::mesh::create_mesh(
-      comm, adj, dolfinx::fem::CoordinateElement(ct, 1), x, {nn, 3},
-      dolfinx::mesh::GhostMode::none));
+  if (cells.empty())
+    throw std::runtime_error("the shell mesh has no cell left (a hole covering the whole rectangle)");
+  // the used vertices, numbered in their grid order
+  std::vector<std::int64_t> number(std::size_t(nx + 1) * (ny + 1), -1);
+  for (auto v : cells)
+    number[v] = 0;
+  std::vector<double> x;
+  std::int64_t used = 0;
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i)
+    {
+      if (number[id(i, j)] < 0)
+        continue;
+      number[id(i, j)] = used++;
+      const auto y = p.apply({lx * i / nx, ly * j / ny, 0.0});
+      x.insert(x.end(), y.begin(), y.end());
+    }
+  for (auto& v : cells)
+    v = number[v];
+  return impl::shell_mesh(comm, std::move(x), std::move(cells), cell);
+}
+
+/// The grid line of `value` on a grid of n divisions of [0, l].
+/// @throws std::runtime_error naming the value unless it lies on one.
+int grid_line(double value, double l, int n, const char* what)
+{
+  const double t = value / l * n;
+  const double k = std::round(t);
+  if (!(std::abs(t - k) <= 1e-9 * n) || k < 0 || k > n)
+    throw std::runtime_error(std::string("hole ") + what + " " + std::to_string(value) + " m: must lie on a grid line, "
+                             "a multiple of " + std::to_string(l / n) + " m in [0, " + std::to_string(l) + "] m");
+  return static_cast<int>(k);
+}
+} // namespace
+
+std::shared_ptr<dolfinx::mesh::Mesh>
+create_shell_rectangle(MPI_Comm comm, double lx, double ly, int nx, int ny,
+                       Cell cell, const Placement& p)
+{
+  return structured_shell(comm, lx, ly, nx, ny, cell, p, [](int, int) { return true; });
+}
+
+std::shared_ptr<dolfinx::mesh::Mesh> create_shell_rectangle_with_hole(MPI_Comm comm, double lx, double ly, int nx,
+                                                                      int ny, const RectangularHole& hole, Cell cell,
+                                                                      const Placement& p)
+{
+  check_divisions({nx, ny});
+  check_lengths({lx, ly});
+  const int i0 = grid_line(hole.lo[0], lx, nx, "x from"), i1 = grid_line(hole.hi[0], lx, nx, "x to");
+  const int j0 = grid_line(hole.lo[1], ly, ny, "y from"), j1 = grid_line(hole.hi[1], ly, ny, "y to");
+  if (!(i1 > i0 && j1 > j0))
+    throw std::runtime_error("hole from (" + std::to_string(hole.lo[0]) + ", " + std::to_string(hole.lo[1]) + ") to ("
+                             + std::to_string(hole.hi[0]) + ", " + std::to_string(hole.hi[1])
+                             + ") m: its upper corner must exceed the lower on both axes");
+  return structured_shell(comm, lx, ly, nx, ny, cell, p,
+                          [=](int i, int j) { return !(i >= i0 && i < i1 && j >= j0 && j < j1); });
 }
 
 std::shared_ptr<dolfinx::mesh::Mesh>

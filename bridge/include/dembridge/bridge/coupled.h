@@ -27,7 +27,8 @@ namespace dembridge::bridge
 
 struct CouplingOptions
 {
-  PlanarOverlap overlap;
+  /// the overlap band round the DE-only core (weight.h)
+  Overlap overlap = PlanarOverlap{};
   double weight_floor = 1e-3;   ///< in (0, 1)
   double dt = 0.0;              ///< [s]; 0 = safety x the coupled critical step
   /// fraction of the coupled critical step, in (0, 0.95]: the step is a
@@ -135,6 +136,7 @@ private:
   void own_critical_steps();                        // each side's, unweighted
   void weigh_fe(const CouplingOptions& o);          // weight field, FE masses
   void weigh_de(const CouplingOptions& o);          // masses, sphere and link weights
+  void refuse_beyond(const Overlap& overlap) const; // no sphere past the band's FE edge
   void locate_overlap();                            // G_FE of the overlap's particles
   void coupled_time_step(const CouplingOptions& o); // and the step to use
   void give_back() noexcept;                        // the caller's masses and weights

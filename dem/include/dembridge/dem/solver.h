@@ -6,6 +6,7 @@
 /// step is in forces.h.
 
 #include "dembridge/core/stepping.h"
+#include "dembridge/dem/addon.h"
 #include "dembridge/dem/assembly.h"
 #include "dembridge/dem/bars.h"
 #include "dembridge/dem/body.h"
@@ -27,35 +28,11 @@ namespace dembridge::dem
 {
 
 struct ForceScratch;
-
-/// Energy budget [J]: kinetic + elastic + softening + compaction + breakage + friction +
-/// damping + the rigid bodies' kinetic, contact and friction energies + the
-/// bars' kinetic, elastic, plastic, bond slip and broken energies =
-/// initial + external_work + prescribed_work.
-struct DemEnergy
+namespace impl
 {
-  double initial = 0.0, kinetic = 0.0, elastic = 0.0, softening = 0.0, breakage = 0.0,
-         friction = 0.0, damping = 0.0, external_work = 0.0, prescribed_work = 0.0;
-  double compaction = 0.0;    ///< dissipated by the links' compaction (state: recomputed, not booked)
-  double body_kinetic = 0.0;  ///< the moving bodies' kinetic energy
-  double body_contact = 0.0;  ///< elastic energy of the sphere-body contacts
-  double body_friction = 0.0; ///< dissipated by sliding on the bodies
-  /// Carried away by the spheres that left the domain: their kinetic
-  /// energy and the elastic energy of their links and contacts then.
-  double removed = 0.0;
-  double bar_kinetic = 0.0; ///< the bar nodes' kinetic energy
-  double bar_elastic = 0.0; ///< the bars' steel and bonds (bars.h: BarEnergy) and the spheres' contacts with them
-  double bar_plastic = 0.0; ///< the steel's plastic work (a state)
-  double bar_opening = 0.0; ///< the bonds' radial softening (a state)
-  double bar_slip = 0.0;    ///< dissipated by the bonds' slip beyond their envelope
-  double bar_broken = 0.0;  ///< released by bar elements that broke and bonds that opened
-  double imbalance() const
-  {
-    return kinetic + elastic + softening + compaction + breakage + friction + damping + body_kinetic
-           + body_contact + body_friction + removed + bar_kinetic + bar_elastic + bar_plastic + bar_opening + bar_slip
-           + bar_broken - initial - external_work - prescribed_work;
-  }
-};
+class BodyAddOn;
+class BarAddOn;
+} // namespace impl
 
 /// What the spheres that left the domain carried away.
 struct Removed
@@ -65,17 +42,6 @@ struct Removed
   std::array<double, 3> momentum{0, 0, 0}; ///< [kg m/s]
   double kinetic = 0.0;                    ///< translation and rotation [J]
   double elastic = 0.0;                    ///< in their links and contacts [J]
-};
-
-/// Wall time spent in each part of the steps so far [s].
-struct DemTimings
-{
-  double forces = 0.0;      ///< compute_forces: links and sphere contacts
-  double contacts = 0.0;    ///< of forces: the sphere contacts' part
-  double bodies = 0.0;      ///< the rigid bodies' contacts
-  double bars = 0.0;        ///< the bars' elements and bonds
-  double neighbours = 0.0;  ///< neighbour-list checks and rebuilds
-  double integration = 0.0; ///< kicks, drift, conditions, reactions, checks
 };
 
 class DemSolver
@@ -103,7 +69,7 @@ public:
   /// the spheres' step, or a fixed wall. Returns its index.
   /// @throws std::runtime_error on a bad shape or mass, or a name in use.
   std::size_t add_body(RigidBody b);
-  std::size_t bodies() const { return _bodies.size(); }
+  std::size_t bodies() const;
   /// The domain: a sphere whose centre leaves the box [lo, hi] at the end of
   /// a step is removed from the computation (fragments flying off): its
   /// links (state `removed`) and contacts end, it is held where it is, left
@@ -120,16 +86,23 @@ public:
   /// leaves the domain open. @throws std::runtime_error after start() or on
   /// a second call.
   void add_bars(Bars bars);
-  const Bars& bars() const { return _bars; }
+  const Bars& bars() const;
   /// The listed bar nodes move at a constant velocity [m/s] (a bar pulled
   /// at its end; zero holds them); before start(). Returns the group's
   /// index for bar_reaction(). @throws naming a node out of range or moved
   /// already, or after start().
   std::size_t move_bar_nodes(std::span<const std::int32_t> nodes, const std::array<double, 3>& velocity);
   /// The force that keeps the velocity of the nodes of group `g` [N].
-  std::array<double, 3> bar_reaction(std::size_t g) const { return _bar_reac.at(g); }
-  const RigidBody& body(std::size_t k) const { return _bodies.at(k); }
-  const BodyContacts& body_contacts(std::size_t k) const { return _contacts.at(k); }
+  /// @throws std::out_of_range for a group not made by move_bar_nodes.
+  std::array<double, 3> bar_reaction(std::size_t g) const;
+  /// @throws std::out_of_range for k >= bodies().
+  const RigidBody& body(std::size_t k) const;
+  const BodyContacts& body_contacts(std::size_t k) const;
+  /// Adds an add-on (addon.h; before start()): it is called at the step's
+  /// fixed points after those added before it (the rigid bodies always
+  /// before the bars). @throws std::runtime_error after start(), on an
+  /// empty name or one with '/', or a name in use.
+  AddOn& add_addon(std::unique_ptr<AddOn> a);
   /// Computes the initial forces and energy (call after the conditions).
   void start();
   /// One step (begin_step then end_step). @throws std::runtime_error naming
@@ -217,27 +190,13 @@ private:
   // the full step
   void move_hinged(std::size_t motion, double t_half, double t_new, bool begin);
   std::unique_ptr<ForceScratch> _scratch; // the force loop's (force_loop.h, internal)
-  std::vector<RigidBody> _bodies;
-  std::vector<BodyContacts> _contacts; // one per body
-  void kick_bodies(double h);
-  void save_bodies(const checkpoint::Group& g) const;
-  void load_bodies(const checkpoint::Group& g);
-  void drift_bodies();
-  void contact_bodies(double dt);
-  Bars _bars;
-  BarContacts _bar_contacts; // spheres on the bars beyond their bonds
-  std::vector<std::uint8_t> _bar_open_old, _bar_broken_old; // the bonds' and elements' state before the step's forces
-  double bar_contact_jump(); // the contacts' energy lost when bonds open or elements break
-  bool _has_bars = false;
-  std::vector<std::int32_t> _bar_moved; // nodes with a prescribed velocity
-  std::vector<std::int32_t> _bar_group; // the group of each (move_bar_nodes' call)
-  std::vector<double> _bar_fold;        // their force at the step's start (3 per node)
-  std::vector<std::array<double, 3>> _bar_reac; // per group
-  void kick_bars(double h);
-  double drift_bars(); // returns the damping's work
-  double bar_reactions(); // the moved nodes' reaction; returns its work
-  void save_bars(const checkpoint::Group& g) const;
-  void load_bars(const checkpoint::Group& g);
+  // the add-ons in the order they are called; two of them reached by type
+  std::vector<std::unique_ptr<AddOn>> _addons;
+  impl::BodyAddOn* _bodies = nullptr;
+  impl::BarAddOn* _bars = nullptr;
+  StepView view() const; // (_p and _l are references: the view may change them)
+  void save_addons(const checkpoint::Group& g) const;
+  void load_addons(const checkpoint::Group& g);
   double _dt, _c, _t = 0.0;
   std::int64_t _steps = 0;
   core::EnergyGuard _guard;

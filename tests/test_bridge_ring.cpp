@@ -1,0 +1,353 @@
+// The coupling through a ring-shaped overlap: a square plate of shells with
+// a square hole round a DE core, the band of width 20 mm round the hole
+// shared. The patch tests of the planar overlap, on the ring: a uniform
+// velocity is carried unchanged, a rigid rotation is left as it is by the
+// multiplier correction, and the constraint holds after every step.
+#include "dembridge/bridge/coupled.h"
+#include "dembridge/dem/material_file.h"
+#include "dembridge/dem/packing.h"
+#include "dembridge/shell/mesh.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <dolfinx/mesh/Mesh.h>
+#include <filesystem>
+#include <fstream>
+#include <mpi.h>
+#include <numbers>
+#include <unistd.h>
+// after DOLFINx headers (INFO)
+#include <catch2/catch.hpp>
+
+using namespace dembridge;
+
+namespace
+{
+constexpr double side = 0.16, thick = 0.02, band = 0.02;
+const std::array<double, 2> centre{0.08, 0.08}, half{0.03, 0.03}; // the core: the hole [0.05, 0.11]^2
+
+struct Ring
+{
+  std::unique_ptr<shell::FEModel> fe;
+  dem::Particles p;
+  dem::Links l;
+  dem::Material mat;
+  bridge::Overlap overlap = bridge::Overlap::box(centre, half, band);
+};
+
+/// The plate's shells on `mesh` and the spheres of the core and its band
+/// (the band's corners rounded where the distance is), through the plate's
+/// thickness.
+Ring make_ring(std::shared_ptr<dolfinx::mesh::Mesh> mesh, const bridge::Overlap& overlap)
+{
+  Ring b;
+  b.overlap = overlap;
+  shell::Material sm;
+  sm.thickness = thick;
+  b.fe = std::make_unique<shell::FEModel>(mesh, sm);
+  dem::PackingOptions po;
+  po.mean_radius = 2.5e-3;
+  const auto region = dem::sdf_region(
+      "core and band",
+      [overlap](const dem::Point& x)
+      { return std::max(overlap.distance({x[0], x[1], x[2]}) - band, std::abs(x[2]) - 0.5 * thick); },
+      {0.03, 0.03, -0.5 * thick}, {0.13, 0.13, 0.5 * thick});
+  const auto pk = dem::generate_packing(region, po);
+  double solid = 0.0;
+  for (double r : pk.r)
+    solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  b.mat = dem::read_material(DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json").material;
+  b.mat.tensile = b.mat.cohesion = 1e12; // elastic
+  b.p = dem::make_particles(pk.x, pk.r, b.mat.density, solid / region.volume);
+  b.l = dem::create_links(b.p, dem::lambda_for_mean_links(b.p.x, b.p.r, 12.0), b.mat);
+  return b;
+}
+
+/// The square hole on a 10 mm grid of quadrilaterals, its edges on the grid's lines.
+Ring make_ring()
+{
+  return make_ring(shell::create_shell_rectangle_with_hole(MPI_COMM_WORLD, side, side, 16, 16,
+                                                           {{0.05, 0.05}, {0.11, 0.11}}, shell::Cell::quadrilateral),
+                   bridge::Overlap::box(centre, half, band));
+}
+
+struct Drift
+{
+  double de = 0.0, fe = 0.0, residual = 0.0;
+};
+
+/// Every sphere and shell node starts at velocity V; `steps` coupled steps;
+/// the largest deviations from V and the largest constraint residual.
+Drift uniform_velocity(Ring& b, const std::array<double, 3>& V, int steps)
+{
+  bridge::CouplingOptions o;
+  o.overlap = b.overlap;
+  bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
+  REQUIRE(s.constrained() > 100); // the ring holds spheres all round
+  std::vector<double> u(b.fe->num_dofs(), 0.0), v(b.fe->num_dofs(), 0.0);
+  for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
+    for (int d = 0; d < 3; ++d)
+      v[6 * k + d] = V[d];
+  for (std::size_t i = 0; i < b.p.size(); ++i)
+    for (int d = 0; d < 3; ++d)
+      b.p.v[3 * i + d] = V[d];
+  s.start(u, v);
+  Drift off;
+  for (int k = 0; k < steps; ++k)
+    off.residual = std::max(off.residual, s.step());
+  for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
+    for (int d = 0; d < 3; ++d)
+      off.fe = std::max(off.fe, std::abs(s.fe().v()[6 * k + d] - V[d]));
+  for (std::size_t i = 0; i < b.p.size(); ++i)
+    for (int d = 0; d < 3; ++d)
+      off.de = std::max(off.de, std::abs(b.p.v[3 * i + d] - V[d]));
+  return off;
+}
+} // namespace
+
+TEST_CASE("ring overlap: a uniform velocity is carried unchanged, the constraint held every step",
+          "[bridge][coupled][ring]")
+{
+  auto b = make_ring();
+  // the residual after each correction: the constraint G_FE v_FE = G_DE v_DE
+  // holds to the multiplier solve's round-off (the required 1e-10 of the motion)
+  const std::array<double, 3> V{0.3, -0.2, 0.1};
+  const double vn = std::sqrt(0.14);
+  const Drift off = uniform_velocity(b, V, 200);
+  INFO("off by " << off.de << " m/s (spheres), " << off.fe << " m/s (shell nodes); largest residual " << off.residual
+                 << " m/s");
+  CHECK(off.residual < 1e-10 * vn);
+  CHECK(off.de < 1e-10 * vn);
+  CHECK(off.fe < 1e-10 * vn);
+}
+
+TEST_CASE("ring overlap: a rigid rotation is left as it is by the correction, then changes at second order",
+          "[bridge][coupled][ring]")
+{
+  // As the planar patch test (test_bridge_coupled.cpp): the rigid field
+  // satisfies the constraint, so start()'s correction changes nothing (the
+  // required 1e-10); over steps, straight-line drift strains the links at
+  // second order in omega t, so halving omega divides the deviation by 4.
+  auto b0 = make_ring();
+  const std::vector<double> x0 = b0.p.x;
+  struct Off
+  {
+    double de = 0.0, fe = 0.0, vmax = 0.0, residual = 0.0;
+  };
+  auto run = [&](double scale)
+  {
+    auto b = make_ring(); // the same packing (deterministic)
+    REQUIRE(b.p.x == x0);
+    bridge::CouplingOptions o;
+    o.overlap = b.overlap;
+    bridge::CoupledSolver s(*b.fe, b.p, b.l, b.mat, o);
+    const std::array<double, 3> om{0.2 * scale, -0.1 * scale, 0.3 * scale}, c{0.08, 0.08, 0.0};
+    auto rigid = [&](const double* x)
+    {
+      const double r[3] = {x[0] - c[0], x[1] - c[1], x[2] - c[2]};
+      return std::array<double, 3>{om[1] * r[2] - om[2] * r[1], om[2] * r[0] - om[0] * r[2],
+                                   om[0] * r[1] - om[1] * r[0]};
+    };
+    const auto xn = b.fe->node_coordinates();
+    std::vector<double> u(b.fe->num_dofs(), 0.0), v(b.fe->num_dofs(), 0.0);
+    for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
+    {
+      const auto vk = rigid(&xn[3 * k]);
+      for (int d = 0; d < 3; ++d)
+      {
+        v[6 * k + d] = vk[d];
+        v[6 * k + 3 + d] = om[d];
+      }
+    }
+    for (std::size_t i = 0; i < b.p.size(); ++i)
+    {
+      const auto vi = rigid(&x0[3 * i]);
+      for (int d = 0; d < 3; ++d)
+      {
+        b.p.v[3 * i + d] = vi[d];
+        b.p.w[3 * i + d] = om[d];
+      }
+    }
+    auto measure = [&](Off off)
+    {
+      for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
+      {
+        const auto vk = rigid(&xn[3 * k]);
+        for (int d = 0; d < 3; ++d)
+        {
+          off.vmax = std::max(off.vmax, std::abs(vk[d]));
+          off.fe = std::max(off.fe, std::abs(s.fe().v()[6 * k + d] - vk[d]));
+        }
+      }
+      for (std::size_t i = 0; i < b.p.size(); ++i)
+      {
+        const auto vi = rigid(&x0[3 * i]);
+        for (int d = 0; d < 3; ++d)
+          off.de = std::max(off.de, std::abs(b.p.v[3 * i + d] - vi[d]));
+      }
+      return off;
+    };
+    s.start(u, v);
+    const Off at_start = measure({});
+    Off after;
+    for (int k = 0; k < 10; ++k)
+      after.residual = std::max(after.residual, s.step());
+    return std::pair{at_start, measure(after)};
+  };
+  const auto [start_full, full] = run(1.0);
+  const Off half_omega = run(0.5).second;
+  INFO("after start(): spheres off by " << start_full.de << " m/s, shell nodes by " << start_full.fe
+                                        << " m/s, largest velocity " << start_full.vmax << " m/s");
+  CHECK(start_full.de < 1e-10 * start_full.vmax);
+  CHECK(start_full.fe < 1e-10 * start_full.vmax);
+  INFO("after 10 steps: spheres off by " << full.de << " m/s (half omega " << half_omega.de << "), shell nodes by "
+                                         << full.fe << " (" << half_omega.fe << "); largest residual " << full.residual);
+  CHECK(full.residual < 1e-10 * full.vmax);
+  // second order: x 1/4 with half omega (3 allows for round-off)
+  CHECK(half_omega.de < full.de / 3.0);
+  CHECK(half_omega.fe < full.fe / 3.0);
+}
+
+TEST_CASE("ring overlap: the shells' mesh with a hole", "[shell][ring]")
+{
+  auto mesh = shell::create_shell_rectangle_with_hole(MPI_COMM_WORLD, side, side, 16, 16, {{0.05, 0.05}, {0.11, 0.11}},
+                                                      shell::Cell::quadrilateral);
+  shell::Material sm;
+  sm.thickness = thick;
+  shell::FEModel fe(mesh, sm);
+  // 17^2 grid vertices less the 5^2 strictly inside the hole
+  CHECK(fe.num_nodes() == 17 * 17 - 5 * 5);
+  const auto x = fe.node_coordinates();
+  for (std::size_t k = 0; k < fe.num_nodes(); ++k)
+  {
+    const bool inside = x[3 * k] > 0.05 + 1e-12 && x[3 * k] < 0.11 - 1e-12 && x[3 * k + 1] > 0.05 + 1e-12
+                        && x[3 * k + 1] < 0.11 - 1e-12;
+    CHECK(!inside);
+  }
+  using Catch::Contains;
+  CHECK_THROWS_WITH(shell::create_shell_rectangle_with_hole(MPI_COMM_WORLD, side, side, 16, 16,
+                                                            {{0.055, 0.05}, {0.11, 0.11}}, shell::Cell::quadrilateral),
+                    Contains("hole x from 0.055") && Contains("grid line"));
+  CHECK_THROWS_WITH(shell::create_shell_rectangle_with_hole(MPI_COMM_WORLD, side, side, 16, 16,
+                                                            {{0.11, 0.05}, {0.05, 0.11}}, shell::Cell::quadrilateral),
+                    Contains("upper corner must exceed"));
+  CHECK_THROWS_WITH(shell::create_shell_rectangle_with_hole(MPI_COMM_WORLD, side, side, 16, 16,
+                                                            {{0.0, 0.0}, {side, side}}, shell::Cell::triangle),
+                    Contains("no cell left"));
+}
+
+namespace
+{
+/// The mesh's area [m^2] from its cells (flat: two triangles per quadrilateral).
+double mesh_area(const dolfinx::mesh::Mesh& mesh)
+{
+  const auto& dofs = mesh.geometry().dofmap();
+  const auto x = mesh.geometry().x();
+  auto tri = [&](int a, int b, int c)
+  {
+    const double u[3] = {x[3 * b] - x[3 * a], x[3 * b + 1] - x[3 * a + 1], x[3 * b + 2] - x[3 * a + 2]};
+    const double v[3] = {x[3 * c] - x[3 * a], x[3 * c + 1] - x[3 * a + 1], x[3 * c + 2] - x[3 * a + 2]};
+    const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    return 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  };
+  double area = 0.0;
+  for (std::int32_t c = 0; c < dofs.num_nodes(); ++c)
+  {
+    const auto v = dofs.links(c);
+    area += v.size() == 3 ? tri(v[0], v[1], v[2]) : tri(v[0], v[1], v[3]) + tri(v[0], v[3], v[2]);
+  }
+  return area;
+}
+} // namespace
+
+TEST_CASE("Gmsh: a slab's outline with a circular hole, quadrilaterals", "[shell][ring][gmsh]")
+{
+  shell::SlabOutline o;
+  o.lx = o.ly = side;
+  o.hole = shell::SlabOutline::Hole::circle;
+  o.centre = centre;
+  o.radius = 0.03;
+  o.size = 0.01;
+  auto mesh = shell::mesh_outline(MPI_COMM_WORLD, o, shell::Cell::quadrilateral);
+  CHECK(mesh->topology().cell_type() == dolfinx::mesh::CellType::quadrilateral);
+  // the hole's boundary: a regular polygon of N nodes on the circle (each
+  // quarter arc divided alike), so the area is exactly the square's less it
+  const auto x = mesh->geometry().x();
+  const std::size_t nn = x.size() / 3;
+  int on_circle = 0;
+  double inside = 0.0;
+  for (std::size_t k = 0; k < nn; ++k)
+  {
+    const double r = std::hypot(x[3 * k] - centre[0], x[3 * k + 1] - centre[1]);
+    on_circle += std::abs(r - o.radius) < 1e-12;
+    inside = std::max(inside, o.radius - r);
+  }
+  REQUIRE(on_circle >= 16);
+  const double N = on_circle, polygon = 0.5 * N * o.radius * o.radius * std::sin(2.0 * std::numbers::pi / N);
+  INFO(nn << " nodes, " << on_circle << " on the hole's circle");
+  CHECK(std::abs(mesh_area(*mesh) / (side * side - polygon) - 1.0) < 1e-12);
+  CHECK(inside < 1e-12); // no node inside the hole
+  // triangles on request
+  auto tri = shell::mesh_outline(MPI_COMM_WORLD, o, shell::Cell::triangle);
+  CHECK(tri->topology().cell_type() == dolfinx::mesh::CellType::triangle);
+  // bad outlines, named
+  using Catch::Contains;
+  auto bad = o;
+  bad.radius = 0.09;
+  CHECK_THROWS_WITH(shell::mesh_outline(MPI_COMM_WORLD, bad, shell::Cell::triangle),
+                    Contains("must lie strictly inside the slab"));
+  bad = o;
+  bad.size = 0.0;
+  CHECK_THROWS_WITH(shell::mesh_outline(MPI_COMM_WORLD, bad, shell::Cell::triangle), Contains("element size 0 m"));
+  CHECK_THROWS_WITH(shell::mesh_outline(MPI_COMM_WORLD, o, shell::Cell::hexahedron), Contains("not hexahedron"));
+}
+
+TEST_CASE("Gmsh: a .msh file is read; bad files are refused naming them", "[shell][gmsh]")
+{
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("dembridge-gmsh-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  // two quadrilaterals over [0, 2] x [0, 1] (MSH 2.2, ASCII)
+  {
+    std::ofstream f(dir / "two.msh");
+    f << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n6\n1 0 0 0\n2 1 0 0\n3 2 0 0\n4 0 1 0\n5 1 1 0\n6 2 1 0\n"
+         "$EndNodes\n$Elements\n2\n1 3 2 1 1 1 2 5 4\n2 3 2 1 1 2 3 6 5\n$EndElements\n";
+  }
+  auto mesh = shell::read_gmsh(MPI_COMM_WORLD, dir / "two.msh");
+  CHECK(mesh->geometry().dofmap().num_nodes() == 2);
+  CHECK(std::abs(mesh_area(*mesh) - 2.0) < 1e-14);
+  shell::Material sm;
+  sm.thickness = 0.1;
+  shell::FEModel fe(mesh, sm);
+  CHECK(fe.num_nodes() == 6);
+  {
+    std::ofstream f(dir / "bad.msh");
+    f << "not a mesh\n";
+  }
+  using Catch::Contains;
+  CHECK_THROWS_WITH(shell::read_gmsh(MPI_COMM_WORLD, dir / "missing.msh"), Contains("missing.msh: no such file"));
+  CHECK_THROWS_WITH(shell::read_gmsh(MPI_COMM_WORLD, dir / "bad.msh"), Contains("bad.msh"));
+  fs::remove_all(dir);
+}
+
+TEST_CASE("ring overlap round a cylinder core, shells meshed by Gmsh: a uniform velocity is carried unchanged",
+          "[bridge][coupled][ring][gmsh]")
+{
+  shell::SlabOutline outline;
+  outline.lx = outline.ly = side;
+  outline.hole = shell::SlabOutline::Hole::circle;
+  outline.centre = centre;
+  outline.radius = 0.03;
+  outline.size = 0.01;
+  // the core: the hole's cylinder
+  auto b = make_ring(shell::mesh_outline(MPI_COMM_WORLD, outline, shell::Cell::quadrilateral),
+                     bridge::Overlap::cylinder(centre, outline.radius, band));
+  const std::array<double, 3> V{0.3, -0.2, 0.1};
+  const double vn = std::sqrt(0.14);
+  const Drift off = uniform_velocity(b, V, 100);
+  INFO("off by " << off.de << " m/s (spheres), " << off.fe << " m/s (shell nodes); largest residual " << off.residual);
+  CHECK(off.residual < 1e-10 * vn);
+  CHECK(off.de < 1e-10 * vn);
+  CHECK(off.fe < 1e-10 * vn);
+}
