@@ -465,9 +465,10 @@ ReinforcementSpec read_reinforcement(Reader& r, const MaterialSpec& m)
   b.bond_reach = r.number("bond_reach_m", b.bond_reach, Allowed::non_negative(1.0).or_value(0.0, "half the mean radius"),
                           "a sphere is bonded when its surface lies within this of a bar's [m]");
   b.embedded = r.boolean("embedded", b.embedded,
-                         "true: the slab is packed as without bars, the bars lie inside it, bonded to the spheres "
-                         "they cross and meeting the spheres only through bonds; false: the packing leaves the bars "
-                         "room and spheres beyond their bonds are pushed off the bars (docs/impact.md)");
+                         "true (the default): the slab is packed as without bars, the bars lie inside it, bonded to "
+                         "the spheres they cross and meeting the spheres only through bonds; false: the packing leaves "
+                         "the bars room and spheres beyond their bonds are pushed off the bars, which weakens the slab "
+                         "in the mats' planes (docs/impact.md)");
   return b;
 }
 

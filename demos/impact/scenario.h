@@ -69,8 +69,9 @@ struct ReinforcementSpec
   double element_length = 0.0; ///< [m]; 0 = the mean sphere diameter
   double bond_reach = 0.0;     ///< [m]; 0 = half the mean sphere radius
   /// true: the slab is packed as without bars and the bars lie inside it,
-  /// bonded to the spheres they cross (no room left, no sphere-bar contact)
-  bool embedded = false;
+  /// bonded to the spheres they cross (no room left, no sphere-bar contact);
+  /// the default, as the room left for the bars weakens the slab (docs/impact.md)
+  bool embedded = true;
   bool any() const { return layers > 0 || !polylines.empty(); }
 };
 
