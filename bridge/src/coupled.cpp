@@ -1,6 +1,7 @@
 #include "dembridge/bridge/coupled.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -23,7 +24,13 @@ double now_s()
 
 CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& l,
                              const dem::Material& mat, const CouplingOptions& o)
-    : _model(fe), _p(p), _l(l)
+    : CoupledSolver(fe, p, l, mat, o, dem::Bars{})
+{
+}
+
+CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& l, const dem::Material& mat,
+                             const CouplingOptions& o, dem::Bars bars)
+    : _model(fe), _p(p), _l(l), _bars(std::move(bars))
 {
   if (!p.weight.empty() || !l.weight.empty())
     throw std::runtime_error("these particles or links already carry energy weights: another "
@@ -37,14 +44,17 @@ CoupledSolver::CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& 
     own_critical_steps();
     weigh_fe(o);
     weigh_de(o);
+    weigh_bars(o);
     locate_overlap();
-    coupled_time_step(o);
+    coupled_time_step(o, mat);
     _mult = std::make_unique<MultiplierSolver>(_op, _m_de, _m_fe, _dt);
     _fe_solver = std::make_unique<shell::ExplicitSolver>(_m_fe, fe.internal_force_fn(), _dt,
                                                          o.damping_fe);
     const double rmin = *std::min_element(p.r.begin(), p.r.end());
     _de_solver = std::make_unique<dem::DemSolver>(p, l, mat, _dt, o.damping_de,
                                                   o.skin > 0.0 ? o.skin : 0.5 * rmin);
+    if (_bars.nodes() > 0)
+      _de_solver->add_bars(std::move(_bars));
     // each side's budget carries the multipliers' work, so only the sum
     // closes: the coupler guards that
     _fe_solver->set_energy_guard(0.0);
@@ -185,25 +195,79 @@ void CoupledSolver::refuse_beyond(const Overlap& overlap) const
   throw std::runtime_error(m.str());
 }
 
+void CoupledSolver::weigh_bars(const CouplingOptions& o)
+{
+  // the bars' energies weighted as the links', their masses as the
+  // spheres': an element's force and energy scale with its area, a bending
+  // spring's with its stiffness, a bond's with its surface
+  if (_bars.nodes() == 0)
+    return;
+  auto weight = [&](const double* x) { return 1.0 - o.overlap.weight({x[0], x[1], x[2]}); };
+  std::size_t beyond = 0;
+  std::array<double, 3> at{0, 0, 0};
+  for (std::size_t n = 0; n < _bars.nodes(); ++n)
+  {
+    const double* x = &_bars.x[3 * n];
+    if (o.overlap.beyond({x[0], x[1], x[2]}))
+    {
+      if (beyond++ == 0)
+        at = {x[0], x[1], x[2]};
+      continue;
+    }
+    if (o.overlap.contains({x[0], x[1], x[2]}))
+      _bar_ids.push_back(static_cast<std::int32_t>(n));
+  }
+  if (beyond > 0)
+  {
+    std::ostringstream m;
+    m << beyond << " of the " << _bars.nodes() << " bar nodes lie beyond the overlap on the FE side, the first at ("
+      << at[0] << ", " << at[1] << ", " << at[2] << ") m; the overlap is " << o.overlap.what()
+      << ". End the bars within the band: the shells' steel layers carry the reinforcement beyond it";
+    throw std::runtime_error(m.str());
+  }
+  for (std::size_t e = 0; e < _bars.elements(); ++e)
+  {
+    double mid[3];
+    for (int d = 0; d < 3; ++d)
+      mid[d] = 0.5 * (_bars.x[3 * _bars.a[e] + d] + _bars.x[3 * _bars.b[e] + d]);
+    _bars.area[e] *= weight(mid);
+  }
+  for (std::size_t k = 0; k < _bars.bend_k.size(); ++k)
+    _bars.bend_k[k] *= weight(&_bars.x[3 * _bars.bend_b[k]]);
+  for (std::size_t k = 0; k < _bars.bonds(); ++k)
+    _bars.surface[k] *= _p.weight[_bars.sphere[k]];
+  for (std::size_t n = 0; n < _bars.nodes(); ++n)
+    _bars.m[n] *= floored(weight(&_bars.x[3 * n]), o.weight_floor);
+}
+
+CouplingOperator CoupledSolver::locate_points(const std::vector<double>& pts) const
+{
+  // points in the fictive elements (shell) or the cells (solid)
+  const auto x = _model.node_coordinates();
+  return _model.is_shell() ? locate({x, _model.nodal_normals(), _model.cell_nodes(), _model.nodes_per_cell(),
+                                     _model.material().thickness},
+                                    pts)
+                           : locate_in_solid(x, _model.cell_nodes(), _model.nodes_per_cell(), pts);
+}
+
 void CoupledSolver::locate_overlap()
 {
-  // the overlap's particles in the fictive elements (shell) or the cells (solid)
+  // the overlap's particles, then its bar nodes
   std::vector<double> pts;
   for (auto i : _ids)
     pts.insert(pts.end(), {_p.x[3 * i], _p.x[3 * i + 1], _p.x[3 * i + 2]});
-  const auto x = _model.node_coordinates();
-  _op = _model.is_shell()
-            ? locate({x, _model.nodal_normals(), _model.cell_nodes(), _model.nodes_per_cell(),
-                      _model.material().thickness},
-                     pts)
-            : locate_in_solid(x, _model.cell_nodes(), _model.nodes_per_cell(), pts);
-  _m_de.resize(_ids.size());
+  for (auto n : _bar_ids)
+    pts.insert(pts.end(), {_bars.x[3 * n], _bars.x[3 * n + 1], _bars.x[3 * n + 2]});
+  _op = locate_points(pts);
+  _m_de.resize(_ids.size() + _bar_ids.size());
   for (std::size_t q = 0; q < _ids.size(); ++q)
     _m_de[q] = _p.m[_ids[q]];
-  _v_de.assign(3 * _ids.size(), 0.0);
+  for (std::size_t q = 0; q < _bar_ids.size(); ++q)
+    _m_de[_ids.size() + q] = _bars.m[_bar_ids[q]];
+  _v_de.assign(3 * _m_de.size(), 0.0);
 }
 
-void CoupledSolver::coupled_time_step(const CouplingOptions& o)
+void CoupledSolver::coupled_time_step(const CouplingOptions& o, const dem::Material& mat)
 {
   // power iteration on the coupled system's motions that satisfy the
   // constraint (the multiplier correction is their mass-orthogonal
@@ -219,17 +283,39 @@ void CoupledSolver::coupled_time_step(const CouplingOptions& o)
     f_fe(z.first(nf), f.first(nf));
     dem::stiffness_action(_p, _l, z.subspan(nf), f.subspan(nf));
   };
-  MultiplierSolver projector(_op, _m_de, _m_fe, 1.0);
+  // the iteration moves the spheres and the shell: with tied bar nodes its
+  // projector ties the spheres only
+  const bool bars = !_bar_ids.empty();
+  CouplingOperator spheres_only;
+  if (bars)
+  {
+    std::vector<double> pts;
+    for (auto i : _ids)
+      pts.insert(pts.end(), {_p.x[3 * i], _p.x[3 * i + 1], _p.x[3 * i + 2]});
+    spheres_only = locate_points(pts);
+  }
+  MultiplierSolver projector(bars ? spheres_only : _op, std::span<const double>(_m_de).first(_ids.size()), _m_fe, 1.0);
+  std::vector<double> v(3 * _ids.size());
   auto project = [&](std::span<double> z) {
     for (std::size_t q = 0; q < _ids.size(); ++q)
       for (int d = 0; d < 3; ++d)
-        _v_de[3 * q + d] = z[nf + 3 * _ids[q] + d];
-    projector.correct(_v_de, z.first(nf), false);
+        v[3 * q + d] = z[nf + 3 * _ids[q] + d];
+    projector.correct(v, z.first(nf), false);
     for (std::size_t q = 0; q < _ids.size(); ++q)
       for (int d = 0; d < 3; ++d)
-        z[nf + 3 * _ids[q] + d] = _v_de[3 * q + d];
+        z[nf + 3 * _ids[q] + d] = v[3 * q + d];
   };
   _dt_coupled = 2.0 / std::sqrt(core::max_eigenvalue(mass, f_all, 1e-6, 20000, project));
+  if (bars)
+  {
+    // what the multipliers leave free, the bars' elements and bonds with it
+    std::vector<std::uint8_t> tied_spheres(np, 0), tied_nodes(_bars.nodes(), 0);
+    for (auto i : _ids)
+      tied_spheres[i] = 1;
+    for (auto n : _bar_ids)
+      tied_nodes[n] = 1;
+    _dt_coupled = std::min(_dt_coupled, dem::critical_time_step(_p, _l, mat, _bars, tied_spheres, tied_nodes));
+  }
   if (o.dt > _dt_coupled)
   {
     std::ostringstream s;
@@ -244,15 +330,23 @@ void CoupledSolver::coupled_time_step(const CouplingOptions& o)
 void CoupledSolver::correct(bool half_step, bool residual)
 {
   auto v_fe = _fe_solver->v_mut();
-  for (std::size_t q = 0; q < _ids.size(); ++q)
+  const std::size_t ns = _ids.size();
+  double* v_bars = _bar_ids.empty() ? nullptr : _de_solver->bars_for_coupling().v.data();
+  for (std::size_t q = 0; q < ns; ++q)
     for (int d = 0; d < 3; ++d)
       _v_de[3 * q + d] = _p.v[3 * _ids[q] + d];
+  for (std::size_t q = 0; q < _bar_ids.size(); ++q)
+    for (int d = 0; d < 3; ++d)
+      _v_de[3 * (ns + q) + d] = v_bars[3 * _bar_ids[q] + d];
   // the residual is checked after the half-step correction (the one the
   // positions move with); the full-step one only makes v(n+1) consistent
   const double r = _mult->correct(_v_de, v_fe, half_step && residual);
-  for (std::size_t q = 0; q < _ids.size(); ++q)
+  for (std::size_t q = 0; q < ns; ++q)
     for (int d = 0; d < 3; ++d)
       _p.v[3 * _ids[q] + d] = _v_de[3 * q + d];
+  for (std::size_t q = 0; q < _bar_ids.size(); ++q)
+    for (int d = 0; d < 3; ++d)
+      v_bars[3 * _bar_ids[q] + d] = _v_de[3 * (ns + q) + d];
   if (!half_step)
     return;
   if (residual)

@@ -7,6 +7,7 @@
 #include "dembridge/core/stepping.h"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
@@ -167,6 +168,24 @@ double critical_time_step(const Particles& p, const Links& l, const Material& m,
   const double spheres = step_from_rows(rt, rr);
   const double lmax = nodes.empty() ? 0.0 : *std::max_element(nodes.begin(), nodes.end());
   return lmax > 0.0 ? std::min(spheres, 2.0 / std::sqrt(lmax)) : spheres;
+}
+
+double critical_time_step(const Particles& p, const Links& l, const Material& m, const Bars& bars,
+                          std::span<const std::uint8_t> skip_spheres, std::span<const std::uint8_t> skip_nodes)
+{
+  if (skip_spheres.size() != p.size() || skip_nodes.size() != bars.nodes())
+    throw std::runtime_error("critical time step: the flags to skip are not one per sphere and per bar node");
+  std::vector<double> rt, rr, nodes;
+  body_rows(p, l, m, rt, rr);
+  add_bar_rows(bars, p, m, rt, nodes);
+  double lmax = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (!skip_spheres[i])
+      lmax = std::max({lmax, rt[i], rr[i]});
+  for (std::size_t n = 0; n < nodes.size(); ++n)
+    if (!skip_nodes[n])
+      lmax = std::max(lmax, nodes[n]);
+  return lmax > 0.0 ? 2.0 / std::sqrt(lmax) : std::numeric_limits<double>::infinity();
 }
 
 double particle_critical_time_step(const Particles& p, const Links& l, double rtol)

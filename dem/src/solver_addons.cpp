@@ -70,6 +70,13 @@ const Bars& DemSolver::bars() const
   return _bars ? _bars->bars : none;
 }
 
+Bars& DemSolver::bars_for_coupling()
+{
+  if (!_bars)
+    throw std::runtime_error("bars: the solver has none");
+  return _bars->bars;
+}
+
 std::size_t DemSolver::move_bar_nodes(std::span<const std::int32_t> nodes, const std::array<double, 3>& velocity)
 {
   if (_started)

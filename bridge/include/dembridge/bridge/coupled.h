@@ -85,6 +85,19 @@ public:
   ///   estimate.
   CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& l, const dem::Material& mat,
                 const CouplingOptions& o);
+  /// The same with reinforcing bars on the DE side (bonded to p: bars.h),
+  /// weighted like the spheres and links: node masses max(1 - eta, floor) m,
+  /// element forces and energies (1 - eta) at the element's middle (its
+  /// area), bending springs at their middle node, bonds by their sphere's
+  /// weight (their surface). Bar nodes in the overlap are tied to the FE
+  /// motion as the spheres are. The DE solver takes the weighted bars
+  /// (de().bars()). The time step is also bounded by the Gershgorin bound
+  /// of the spheres and nodes the multipliers leave free (the bars' own
+  /// rows are not in the power iteration).
+  /// @throws std::runtime_error as above, and for bar nodes beyond the
+  ///   overlap on the FE side (named with their count and place).
+  CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& l, const dem::Material& mat,
+                const CouplingOptions& o, dem::Bars bars);
   ~CoupledSolver();
   CoupledSolver(const CoupledSolver&) = delete;
   CoupledSolver& operator=(const CoupledSolver&) = delete;
@@ -118,6 +131,11 @@ public:
   double dt_fe() const { return _dt_fe; }  ///< critical step of the FE model alone, unweighted
   double dt_de() const { return _dt_de; }  ///< critical step of the DE assembly alone, unweighted
   std::size_t constrained() const { return _ids.size(); }
+  /// The bar nodes tied to the FE motion (those in the overlap).
+  std::size_t constrained_bar_nodes() const { return _bar_ids.size(); }
+  /// The multipliers of the last correction, 3 per tied point: the
+  /// constrained particles, then the tied bar nodes [N].
+  std::span<const double> multipliers() const { return _mult->multipliers(); }
   const CouplingOperator& coupling() const { return _op; }
   CoupledEnergy energy() const;
   const CoupledTimings& timings() const { return _time; }
@@ -137,8 +155,10 @@ private:
   void weigh_fe(const CouplingOptions& o);          // weight field, FE masses
   void weigh_de(const CouplingOptions& o);          // masses, sphere and link weights
   void refuse_beyond(const Overlap& overlap) const; // no sphere past the band's FE edge
-  void locate_overlap();                            // G_FE of the overlap's particles
-  void coupled_time_step(const CouplingOptions& o); // and the step to use
+  void weigh_bars(const CouplingOptions& o);        // the bars' masses, areas, springs, bonds
+  void locate_overlap();                            // G_FE of the overlap's particles and bar nodes
+  CouplingOperator locate_points(const std::vector<double>& pts) const;
+  void coupled_time_step(const CouplingOptions& o, const dem::Material& mat); // and the step to use
   void give_back() noexcept;                        // the caller's masses and weights
   void correct(bool half_step, bool residual = true);
   shell::FEModel& _model;
@@ -146,6 +166,8 @@ private:
   dem::Links& _l;
   std::vector<double> _m_given, _inertia_given; // the caller's masses and inertias
   std::vector<std::int32_t> _ids;  // constrained particles
+  dem::Bars _bars;                 // the weighted bars, until the DE solver takes them
+  std::vector<std::int32_t> _bar_ids; // constrained bar nodes (their points follow the particles')
   CouplingOperator _op;
   std::vector<double> _m_fe, _m_de, _v_de;
   std::unique_ptr<MultiplierSolver> _mult;

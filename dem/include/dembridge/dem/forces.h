@@ -90,6 +90,12 @@ double critical_time_step(const Particles& p, const Links& l, const Material& m)
 /// The same with the bars' elements and bonds (bars.h: add_bar_rows): the
 /// step for a reinforced run, the bar nodes' rows included.
 double critical_time_step(const Particles& p, const Links& l, const Material& m, const Bars& bars);
+/// The same bound without the rows of the spheres and bar nodes flagged 1
+/// in `skip_spheres` and `skip_nodes` (sized as the spheres and the nodes):
+/// a coupler's bound on what its multipliers leave free, the tied ones
+/// being in its own estimate. Infinity when every row is left out.
+double critical_time_step(const Particles& p, const Links& l, const Material& m, const Bars& bars,
+                          std::span<const std::uint8_t> skip_spheres, std::span<const std::uint8_t> skip_nodes);
 /// The critical time step of the assembly's links [s]: 2 / sqrt(lambda_max)
 /// of its linearised link stiffness (stiffness_action: translations and
 /// rotations, link weights included) over its masses and inertias, by power

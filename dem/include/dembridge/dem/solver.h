@@ -87,6 +87,10 @@ public:
   /// a second call.
   void add_bars(Bars bars);
   const Bars& bars() const;
+  /// The bars, to change: for a coupler that ties their nodes to another
+  /// model (it corrects their velocities between begin_step and end_step,
+  /// as those of the spheres). @throws std::runtime_error if there are none.
+  Bars& bars_for_coupling();
   /// The listed bar nodes move at a constant velocity [m/s] (a bar pulled
   /// at its end; zero holds them); before start(). Returns the group's
   /// index for bar_reaction(). @throws naming a node out of range or moved
