@@ -4,6 +4,7 @@
 // velocity is carried unchanged, a rigid rotation is left as it is by the
 // multiplier correction, and the constraint holds after every step.
 #include "dembridge/bridge/coupled.h"
+#include "dembridge/bridge/slab.h"
 #include "dembridge/dem/material_file.h"
 #include "dembridge/dem/packing.h"
 #include "dembridge/shell/mesh.h"
@@ -334,15 +335,46 @@ TEST_CASE("Gmsh: a .msh file is read; bad files are refused naming them", "[shel
 TEST_CASE("ring overlap round a cylinder core, shells meshed by Gmsh: a uniform velocity is carried unchanged",
           "[bridge][coupled][ring][gmsh]")
 {
-  shell::SlabOutline outline;
-  outline.lx = outline.ly = side;
-  outline.hole = shell::SlabOutline::Hole::circle;
-  outline.centre = centre;
-  outline.radius = 0.03;
-  outline.size = 0.01;
-  // the core: the hole's cylinder
-  auto b = make_ring(shell::mesh_outline(MPI_COMM_WORLD, outline, shell::Cell::quadrilateral),
-                     bridge::Overlap::cylinder(centre, outline.radius, band));
+  // the parts from the coupled slab's builder (slab.h), in its frame: the
+  // plate centred on the origin, z in [-thick, 0]
+  bridge::SlabSpec spec;
+  spec.size = {side, side};
+  spec.thickness = thick;
+  spec.core = bridge::SlabSpec::Core::cylinder;
+  spec.core_radius = 0.03;
+  spec.band = band;
+  spec.element_size = 0.01;
+  auto mesh = bridge::slab_shells(MPI_COMM_WORLD, spec);
+  const bridge::Overlap ov = bridge::slab_overlap(spec);
+  // the shells: none inside the core, at the mid-surface
+  const auto x = mesh->geometry().x();
+  double inside = 0.0, off_plane = 0.0;
+  for (std::size_t k = 0; 3 * k < x.size(); ++k)
+  {
+    inside = std::max(inside, -ov.distance({x[3 * k], x[3 * k + 1], x[3 * k + 2]}));
+    off_plane = std::max(off_plane, std::abs(x[3 * k + 2] + 0.5 * thick));
+  }
+  CHECK(inside < 1e-12);
+  CHECK(off_plane == 0.0);
+  // the DE region: the cylinder of radius r + band through the thickness
+  // (its volume measured on a grid, 1e-2)
+  const dem::Region region = bridge::slab_de_region(spec);
+  CHECK(std::abs(region.volume / (std::numbers::pi * 0.05 * 0.05 * thick) - 1.0) < 1e-2);
+  Ring b;
+  b.overlap = ov;
+  shell::Material sm;
+  sm.thickness = thick;
+  b.fe = std::make_unique<shell::FEModel>(mesh, sm);
+  dem::PackingOptions po;
+  po.mean_radius = 2.5e-3;
+  const auto pk = dem::generate_packing(region, po);
+  double solid = 0.0;
+  for (double r : pk.r)
+    solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  b.mat = dem::read_material(DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json").material;
+  b.mat.tensile = b.mat.cohesion = 1e12;
+  b.p = dem::make_particles(pk.x, pk.r, b.mat.density, solid / region.volume);
+  b.l = dem::create_links(b.p, dem::lambda_for_mean_links(b.p.x, b.p.r, 12.0), b.mat);
   const std::array<double, 3> V{0.3, -0.2, 0.1};
   const double vn = std::sqrt(0.14);
   const Drift off = uniform_velocity(b, V, 100);
@@ -350,6 +382,25 @@ TEST_CASE("ring overlap round a cylinder core, shells meshed by Gmsh: a uniform 
   CHECK(off.residual < 1e-10 * vn);
   CHECK(off.de < 1e-10 * vn);
   CHECK(off.fe < 1e-10 * vn);
+  // the supports: the outer edges' nodes, 3 dofs each simply supported, 6 clamped
+  const auto held = bridge::slab_support_dofs(*b.fe, spec);
+  spec.edges = bridge::SlabSpec::Edges::clamped;
+  const auto clamped = bridge::slab_support_dofs(*b.fe, spec);
+  REQUIRE(held.size() > 0);
+  CHECK(2 * held.size() == clamped.size());
+  const auto xn = b.fe->node_coordinates();
+  for (std::size_t q = 0; q < held.size(); q += 3)
+  {
+    const std::size_t k = held[q] / 6;
+    CHECK(std::max(std::abs(xn[3 * k]), std::abs(xn[3 * k + 1])) > 0.5 * side - 1e-9);
+  }
+  spec.edges = bridge::SlabSpec::Edges::free;
+  CHECK(bridge::slab_support_dofs(*b.fe, spec).empty());
+  using Catch::Contains;
+  spec.band = 0.06; // the band reaches past the plate's edge
+  CHECK_THROWS_WITH(bridge::slab_de_region(spec), Contains("must lie strictly inside the slab"));
+  spec.band = 0.005; // narrower than the shells' elements
+  CHECK_THROWS_WITH(bridge::slab_shells(MPI_COMM_WORLD, spec), Contains("must not exceed the overlap band"));
 }
 
 namespace
