@@ -1,6 +1,6 @@
 // Shell meshes through Gmsh's C++ API: a slab's outline with a hole for the
 // DE core, meshed into triangles or quadrilaterals, and .msh files.
-#include "dembridge/shell/mesh.h"
+#include "dembridge/shell/gmsh.h"
 #include "mesh_internal.h"
 
 #include <algorithm>

@@ -5,11 +5,12 @@
 /// the shells of the rest of the slab with a hole for the core, supported
 /// on their outer edges. In the impact program's frame: x, y in
 /// [-size / 2, size / 2], z in [-thickness, 0] (the struck face z = 0), the
-/// shells' mid-surface at z = -thickness / 2.
+/// shells' mid-surface at z = -thickness / 2. In the library dembridge::slab
+/// (it meshes with Gmsh: shell/gmsh.h).
 
 #include "dembridge/bridge/weight.h"
 #include "dembridge/dem/packing.h"
-#include "dembridge/shell/mesh.h"
+#include "dembridge/shell/gmsh.h"
 #include "dembridge/shell/model.h"
 
 #include <array>
