@@ -940,7 +940,7 @@ TEST_CASE("restart: a coupled run continued from a checkpoint is the uninterrupt
 }
 
 TEST_CASE("bars across the overlap: a load on the shells reaches the bar's anchor through the tied bar nodes",
-          "[bridge][coupled][bars]")
+          "[bridge][coupled][bars][long]")
 {
   // The small bar: shells on [0, 0.12] m, spheres on [0.08, 0.2] m, the
   // overlap [0.08, 0.12]. A 6 mm steel bar along the axis from the band's
@@ -1073,4 +1073,8 @@ TEST_CASE("bars across the overlap: a uniform velocity is carried unchanged by s
   dem::Bars too_long = dem::make_bars(std::span<const dem::BarLine>(&far, 1), {dem::Steel{}}, {dem::BondLaw{}}, 4e-3);
   CHECK_THROWS_WITH(bridge::CoupledSolver(*c.fe, c.p, c.l, c.mat, o, too_long),
                     Contains("bar nodes lie beyond the overlap on the FE side"));
+  // a bar along the band's FE edge would carry nothing (weight 0): refused
+  const dem::BarLine edge{{{0.08, 0.005, 0.0}, {0.08, 0.045, 0.0}}, 0.006, 0, 0};
+  dem::Bars on_edge = dem::make_bars(std::span<const dem::BarLine>(&edge, 1), {dem::Steel{}}, {dem::BondLaw{}}, 4e-3);
+  CHECK_THROWS_WITH(bridge::CoupledSolver(*c.fe, c.p, c.l, c.mat, o, on_edge), Contains("lies along the overlap's FE edge"));
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 namespace dembridge::bridge
 {
@@ -230,7 +231,11 @@ void CoupledSolver::weigh_bars(const CouplingOptions& o)
     double mid[3];
     for (int d = 0; d < 3; ++d)
       mid[d] = 0.5 * (_bars.x[3 * _bars.a[e] + d] + _bars.x[3 * _bars.b[e] + d]);
-    _bars.area[e] *= weight(mid);
+    const double w = weight(mid);
+    if (!(w > 0.0)) // (its stress, force over area, would be 0 / 0)
+      throw std::runtime_error("bar element " + std::to_string(e) + " lies along the overlap's FE edge (weight 0 at "
+                               + "its middle): it would carry nothing; end the bar inside the band");
+    _bars.area[e] *= w;
   }
   for (std::size_t k = 0; k < _bars.bend_k.size(); ++k)
     _bars.bend_k[k] *= weight(&_bars.x[3 * _bars.bend_b[k]]);
