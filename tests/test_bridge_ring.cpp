@@ -36,10 +36,8 @@ struct Ring
   bridge::Overlap overlap = bridge::Overlap::box(centre, half, band);
 };
 
-/// The plate's shells on `mesh` and the spheres of the core and its band
-/// (the band's corners rounded where the distance is), through the plate's
-/// thickness.
-Ring make_ring(std::shared_ptr<dolfinx::mesh::Mesh> mesh, const bridge::Overlap& overlap)
+/// The plate's shells on `mesh` and elastic spheres of 2.5 mm packed in `region`.
+Ring make_ring(std::shared_ptr<dolfinx::mesh::Mesh> mesh, const bridge::Overlap& overlap, const dem::Region& region)
 {
   Ring b;
   b.overlap = overlap;
@@ -48,11 +46,6 @@ Ring make_ring(std::shared_ptr<dolfinx::mesh::Mesh> mesh, const bridge::Overlap&
   b.fe = std::make_unique<shell::FEModel>(mesh, sm);
   dem::PackingOptions po;
   po.mean_radius = 2.5e-3;
-  const auto region = dem::sdf_region(
-      "core and band",
-      [overlap](const dem::Point& x)
-      { return std::max(overlap.distance({x[0], x[1], x[2]}) - band, std::abs(x[2]) - 0.5 * thick); },
-      {0.03, 0.03, -0.5 * thick}, {0.13, 0.13, 0.5 * thick});
   const auto pk = dem::generate_packing(region, po);
   double solid = 0.0;
   for (double r : pk.r)
@@ -64,12 +57,20 @@ Ring make_ring(std::shared_ptr<dolfinx::mesh::Mesh> mesh, const bridge::Overlap&
   return b;
 }
 
-/// The square hole on a 10 mm grid of quadrilaterals, its edges on the grid's lines.
+/// The square hole on a 10 mm grid of quadrilaterals, its edges on the
+/// grid's lines; the spheres in the core and its band (the band's corners
+/// rounded where the distance is), through the plate's thickness.
 Ring make_ring()
 {
+  const auto overlap = bridge::Overlap::box(centre, half, band);
+  const auto region = dem::sdf_region(
+      "core and band",
+      [overlap](const dem::Point& x)
+      { return std::max(overlap.distance({x[0], x[1], x[2]}) - band, std::abs(x[2]) - 0.5 * thick); },
+      {0.03, 0.03, -0.5 * thick}, {0.13, 0.13, 0.5 * thick});
   return make_ring(shell::create_shell_rectangle_with_hole(MPI_COMM_WORLD, side, side, 16, 16,
                                                            {{0.05, 0.05}, {0.11, 0.11}}, shell::Cell::quadrilateral),
-                   bridge::Overlap::box(centre, half, band));
+                   overlap, region);
 }
 
 struct Drift
@@ -348,38 +349,21 @@ TEST_CASE("ring overlap round a cylinder core, shells meshed by Gmsh: a uniform 
   spec.core_radius = 0.03;
   spec.band = band;
   spec.element_size = 0.01;
-  auto mesh = bridge::slab_shells(MPI_COMM_WORLD, spec);
-  const bridge::Overlap ov = bridge::slab_overlap(spec);
+  const dem::Region region = bridge::slab_de_region(spec);
+  auto b = make_ring(bridge::slab_shells(MPI_COMM_WORLD, spec), bridge::slab_overlap(spec), region);
   // the shells: none inside the core, at the mid-surface
-  const shell::FEModel plain = shells(mesh);
-  const auto x = plain.node_coordinates();
+  const auto x = b.fe->node_coordinates();
   double inside = 0.0, off_plane = 0.0;
   for (std::size_t k = 0; 3 * k < x.size(); ++k)
   {
-    inside = std::max(inside, -ov.distance({x[3 * k], x[3 * k + 1], x[3 * k + 2]}));
+    inside = std::max(inside, -b.overlap.distance({x[3 * k], x[3 * k + 1], x[3 * k + 2]}));
     off_plane = std::max(off_plane, std::abs(x[3 * k + 2] + 0.5 * thick));
   }
   CHECK(inside < 1e-12);
   CHECK(off_plane < 1e-12);
   // the DE region: the cylinder of radius r + band through the thickness
   // (its volume measured on a grid, 1e-2)
-  const dem::Region region = bridge::slab_de_region(spec);
   CHECK(std::abs(region.volume / (std::numbers::pi * 0.05 * 0.05 * thick) - 1.0) < 1e-2);
-  Ring b;
-  b.overlap = ov;
-  shell::Material sm;
-  sm.thickness = thick;
-  b.fe = std::make_unique<shell::FEModel>(mesh, sm);
-  dem::PackingOptions po;
-  po.mean_radius = 2.5e-3;
-  const auto pk = dem::generate_packing(region, po);
-  double solid = 0.0;
-  for (double r : pk.r)
-    solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-  b.mat = dem::read_material(DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json").material;
-  b.mat.tensile = b.mat.cohesion = 1e12;
-  b.p = dem::make_particles(pk.x, pk.r, b.mat.density, solid / region.volume);
-  b.l = dem::create_links(b.p, dem::lambda_for_mean_links(b.p.x, b.p.r, 12.0), b.mat);
   const std::array<double, 3> V{0.3, -0.2, 0.1};
   const double vn = std::sqrt(0.14);
   const Drift off = uniform_velocity(b, V, 100);
@@ -393,11 +377,10 @@ TEST_CASE("ring overlap round a cylinder core, shells meshed by Gmsh: a uniform 
   const auto clamped = bridge::slab_support_dofs(*b.fe, spec);
   REQUIRE(held.size() > 0);
   CHECK(2 * held.size() == clamped.size());
-  const auto xn = b.fe->node_coordinates();
   for (std::size_t q = 0; q < held.size(); q += 3)
   {
     const std::size_t k = held[q] / 6;
-    CHECK(std::max(std::abs(xn[3 * k]), std::abs(xn[3 * k + 1])) > 0.5 * side - 1e-9);
+    CHECK(std::max(std::abs(x[3 * k]), std::abs(x[3 * k + 1])) > 0.5 * side - 1e-9);
   }
   spec.edges = bridge::SlabSpec::Edges::free;
   CHECK(bridge::slab_support_dofs(*b.fe, spec).empty());
@@ -511,19 +494,19 @@ Crossings all_de_plate(double r, std::size_t& spheres)
   { return (x[0] < r || x[1] < r || x[0] > side - r || x[1] > side - r) && std::abs(x[2]) < r; };
   s.add_motion({"edges", dem::DemSolver::select(p, on_edge, "edges"), dem::MotionKind::displacement,
                 {false, false, true}, [](double) { return 0.0; }});
-  std::vector<std::int32_t> centre;
+  std::vector<std::int32_t> middle;
   for (std::size_t i = 0; i < p.size(); ++i)
   {
     p.v[3 * i + 2] = V_mode * mode(&p.x[3 * i]);
     if (std::hypot(p.x[3 * i] - 0.08, p.x[3 * i + 1] - 0.08) < 6e-3)
-      centre.push_back(static_cast<std::int32_t>(i));
+      middle.push_back(static_cast<std::int32_t>(i));
   }
   s.start();
   Crossings c;
   for (double t = 0.0, w = 0.0; c.full == 0.0 && t < 2e-3;)
   {
     s.step();
-    const double w_new = mean_w(p, centre);
+    const double w_new = mean_w(p, middle);
     c.add(t, w, t + s.dt(), w_new);
     t += s.dt();
     w = w_new;
@@ -558,20 +541,20 @@ TEST_CASE("ring overlap: an elastic plate's first mode, coupled against all shel
   std::vector<double> ur(b.fe->num_dofs(), 0.0), vr(b.fe->num_dofs(), 0.0);
   for (std::size_t k = 0; k < b.fe->num_nodes(); ++k)
     vr[6 * k + 2] = V_mode * mode(&xr[3 * k]);
-  std::vector<std::int32_t> centre;
+  std::vector<std::int32_t> middle;
   for (std::size_t i = 0; i < b.p.size(); ++i)
   {
     b.p.v[3 * i + 2] = V_mode * mode(&b.p.x[3 * i]);
     if (std::hypot(b.p.x[3 * i] - 0.08, b.p.x[3 * i + 1] - 0.08) < 6e-3)
-      centre.push_back(static_cast<std::int32_t>(i));
+      middle.push_back(static_cast<std::int32_t>(i));
   }
-  REQUIRE(centre.size() > 5);
+  REQUIRE(middle.size() > 5);
   s.start(ur, vr);
   Crossings coupled;
   for (double t = 0.0, w = 0.0; coupled.full == 0.0 && t < 2e-3;)
   {
     s.step(false);
-    const double t_new = t + s.dt(), w_new = mean_w(b.p, centre);
+    const double t_new = t + s.dt(), w_new = mean_w(b.p, middle);
     coupled.add(t, w, t_new, w_new);
     t = t_new;
     w = w_new;

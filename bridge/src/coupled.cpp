@@ -155,7 +155,8 @@ void CoupledSolver::weigh_de(const CouplingOptions& o)
   }
   if (_ids.empty())
     throw std::runtime_error("no particle lies in the overlap: the DE and FE regions must overlap");
-  refuse_beyond(o.overlap);
+  refuse_beyond(o.overlap, _p.x, "spheres",
+                "Keep the spheres within the DE core and the band: they would only shrink the coupled time step");
   _l.weight.resize(_l.size());
   for (std::size_t k = 0; k < _l.size(); ++k)
   {
@@ -166,16 +167,17 @@ void CoupledSolver::weigh_de(const CouplingOptions& o)
   }
 }
 
-void CoupledSolver::refuse_beyond(const Overlap& overlap) const
+void CoupledSolver::refuse_beyond(const Overlap& overlap, std::span<const double> x, const char* what,
+                                  const char* advice)
 {
-  // spheres past the band on the FE side have weight 0 and floored masses:
+  // points past the band on the FE side have weight 0 and floored masses:
   // they add nothing to the model but shrink the coupled step
   std::size_t n = 0;
   double worst = -1.0;
   std::array<double, 3> at{0, 0, 0};
-  for (std::size_t i = 0; i < _p.size(); ++i)
+  for (std::size_t i = 0; 3 * i < x.size(); ++i)
   {
-    const std::array<double, 3> xi{_p.x[3 * i], _p.x[3 * i + 1], _p.x[3 * i + 2]};
+    const std::array<double, 3> xi{x[3 * i], x[3 * i + 1], x[3 * i + 2]};
     if (!overlap.beyond(xi))
       continue;
     ++n;
@@ -189,10 +191,9 @@ void CoupledSolver::refuse_beyond(const Overlap& overlap) const
   if (n == 0)
     return;
   std::ostringstream m;
-  m << n << " of the " << _p.size() << " spheres lie beyond the overlap on the FE side (weight 1: the shells alone "
-    << "carry the structure there), up to " << worst << " m past its FE edge, the farthest at (" << at[0] << ", "
-    << at[1] << ", " << at[2] << ") m; the overlap is " << overlap.what()
-    << ". Keep the spheres within the DE core and the band: they would only shrink the coupled time step";
+  m << n << " of the " << x.size() / 3 << " " << what << " lie beyond the overlap on the FE side (weight 1: the "
+    << "shells alone carry the structure there), up to " << worst << " m past its FE edge, the farthest at (" << at[0]
+    << ", " << at[1] << ", " << at[2] << ") m; the overlap is " << overlap.what() << ". " << advice;
   throw std::runtime_error(m.str());
 }
 
@@ -204,28 +205,11 @@ void CoupledSolver::weigh_bars(const CouplingOptions& o)
   if (_bars.nodes() == 0)
     return;
   auto weight = [&](const double* x) { return 1.0 - o.overlap.weight({x[0], x[1], x[2]}); };
-  std::size_t beyond = 0;
-  std::array<double, 3> at{0, 0, 0};
+  refuse_beyond(o.overlap, _bars.x, "bar nodes",
+                "End the bars within the band: the shells' steel layers carry the reinforcement beyond it");
   for (std::size_t n = 0; n < _bars.nodes(); ++n)
-  {
-    const double* x = &_bars.x[3 * n];
-    if (o.overlap.beyond({x[0], x[1], x[2]}))
-    {
-      if (beyond++ == 0)
-        at = {x[0], x[1], x[2]};
-      continue;
-    }
-    if (o.overlap.contains({x[0], x[1], x[2]}))
+    if (o.overlap.contains({_bars.x[3 * n], _bars.x[3 * n + 1], _bars.x[3 * n + 2]}))
       _bar_ids.push_back(static_cast<std::int32_t>(n));
-  }
-  if (beyond > 0)
-  {
-    std::ostringstream m;
-    m << beyond << " of the " << _bars.nodes() << " bar nodes lie beyond the overlap on the FE side, the first at ("
-      << at[0] << ", " << at[1] << ", " << at[2] << ") m; the overlap is " << o.overlap.what()
-      << ". End the bars within the band: the shells' steel layers carry the reinforcement beyond it";
-    throw std::runtime_error(m.str());
-  }
   for (std::size_t e = 0; e < _bars.elements(); ++e)
   {
     double mid[3];

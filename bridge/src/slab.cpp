@@ -3,6 +3,8 @@
 #include "dembridge/bridge/slab.h"
 #include "dembridge/shell/explicit.h"
 
+#include "dembridge/core/text.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -14,12 +16,7 @@ namespace dembridge::bridge
 {
 namespace
 {
-std::string text(double v)
-{
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
+using core::number_text;
 
 /// The core's reach from its axis along x and y [m].
 std::array<double, 2> core_reach(const SlabSpec& s)
@@ -33,18 +30,18 @@ void SlabSpec::validate() const
   for (auto [name, v] : {std::pair{"slab size x", size[0]}, {"slab size y", size[1]}, {"slab thickness", thickness},
                          {"overlap band", band}, {"shell element size", element_size}})
     if (!(v > 0.0) || !std::isfinite(v))
-      throw std::runtime_error(std::string(name) + " " + text(v) + " m: must be > 0");
+      throw std::runtime_error(std::string(name) + " " + number_text(v) + " m: must be > 0");
   const auto r = core_reach(*this);
   if (!(r[0] > 0.0 && r[1] > 0.0))
-    throw std::runtime_error("core size " + text(r[0]) + " x " + text(r[1]) + " m: must be > 0");
+    throw std::runtime_error("core size " + number_text(r[0]) + " x " + number_text(r[1]) + " m: must be > 0");
   for (int k = 0; k < 2; ++k)
     if (!(std::abs(centre[k]) + r[k] + band < 0.5 * size[k]))
-      throw std::runtime_error("the core about (" + text(centre[0]) + ", " + text(centre[1]) + ") m with its band ("
-                               + text(r[k]) + " + " + text(band) + " m) must lie strictly inside the slab's plan, "
-                               + text(size[0]) + " x " + text(size[1]) + " m");
+      throw std::runtime_error("the core about (" + number_text(centre[0]) + ", " + number_text(centre[1]) + ") m with its band ("
+                               + number_text(r[k]) + " + " + number_text(band) + " m) must lie strictly inside the slab's plan, "
+                               + number_text(size[0]) + " x " + number_text(size[1]) + " m");
   if (element_size > band)
-    throw std::runtime_error("shell element size " + text(element_size) + " m: must not exceed the overlap band, "
-                             + text(band) + " m (the band must hold shell nodes across it)");
+    throw std::runtime_error("shell element size " + number_text(element_size) + " m: must not exceed the overlap band, "
+                             + number_text(band) + " m (the band must hold shell nodes across it)");
 }
 
 Overlap slab_overlap(const SlabSpec& s)

@@ -1,5 +1,7 @@
 #include "dembridge/bridge/weight.h"
 
+#include "dembridge/core/text.h"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -35,12 +37,7 @@ bool PlanarOverlap::contains(const std::array<double, 3>& x) const
 
 namespace
 {
-std::string text(double v)
-{
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
+using core::number_text;
 
 /// The two in-plane axes of a slab whose normal is axis `normal`.
 std::array<int, 2> in_plane(int normal)
@@ -64,9 +61,9 @@ Overlap::Overlap(const PlanarOverlap& p)
            const double s = p.axis[0] * x[0] + p.axis[1] * x[1] + p.axis[2] * x[2];
            return p.s_fe > p.s_de ? s - p.s_de : p.s_de - s;
          }),
-      _w(std::abs(p.s_fe - p.s_de)), _what("a planar overlap from " + text(p.s_de) + " m (DE side) to " + text(p.s_fe)
-                                         + " m (FE side) along (" + text(p.axis[0]) + ", " + text(p.axis[1]) + ", "
-                                         + text(p.axis[2]) + ")"),
+      _w(std::abs(p.s_fe - p.s_de)), _what("a planar overlap from " + number_text(p.s_de) + " m (DE side) to " + number_text(p.s_fe)
+                                         + " m (FE side) along (" + number_text(p.axis[0]) + ", " + number_text(p.axis[1]) + ", "
+                                         + number_text(p.axis[2]) + ")"),
       _planar(p)
 {
 }
@@ -89,11 +86,11 @@ Overlap Overlap::box(std::array<double, 2> centre, std::array<double, 2> half, d
               return std::sqrt(ox * ox + oy * oy) + std::min(std::max(qx, qy), 0.0);
             },
             width,
-            "a box core, half sizes " + text(half[0]) + " x " + text(half[1]) + " m about (" + text(centre[0]) + ", "
-                + text(centre[1]) + ") m, band " + text(width) + " m");
+            "a box core, half sizes " + number_text(half[0]) + " x " + number_text(half[1]) + " m about (" + number_text(centre[0]) + ", "
+                + number_text(centre[1]) + ") m, band " + number_text(width) + " m");
   o._invalid = bad_normal(normal);
   if (!(half[0] > 0.0 && half[1] > 0.0) || !std::isfinite(half[0]) || !std::isfinite(half[1]))
-    o._invalid = "box core half sizes " + text(half[0]) + " x " + text(half[1]) + " m: both must be > 0";
+    o._invalid = "box core half sizes " + number_text(half[0]) + " x " + number_text(half[1]) + " m: both must be > 0";
   return o;
 }
 
@@ -103,11 +100,11 @@ Overlap Overlap::cylinder(std::array<double, 2> centre, double radius, double wi
   Overlap o([=](const std::array<double, 3>& x)
             { return std::hypot(x[a] - centre[0], x[b] - centre[1]) - radius; },
             width,
-            "a cylinder core of radius " + text(radius) + " m about (" + text(centre[0]) + ", " + text(centre[1])
-                + ") m, band " + text(width) + " m");
+            "a cylinder core of radius " + number_text(radius) + " m about (" + number_text(centre[0]) + ", " + number_text(centre[1])
+                + ") m, band " + number_text(width) + " m");
   o._invalid = bad_normal(normal);
   if (!(radius > 0.0) || !std::isfinite(radius))
-    o._invalid = "cylinder core radius " + text(radius) + " m: must be > 0";
+    o._invalid = "cylinder core radius " + number_text(radius) + " m: must be > 0";
   return o;
 }
 
@@ -118,7 +115,7 @@ void Overlap::validate() const
   if (!_invalid.empty())
     throw std::runtime_error(_invalid);
   if (!(_w > 0.0) || !std::isfinite(_w))
-    throw std::runtime_error("overlap band width " + text(_w) + " m (" + _what + "): must be > 0");
+    throw std::runtime_error("overlap band width " + number_text(_w) + " m (" + _what + "): must be > 0");
 }
 
 double Overlap::weight(const std::array<double, 3>& x) const

@@ -12,7 +12,9 @@ namespace dembridge::dem
 
 StepView DemSolver::view() const { return {_p, _l, _nl, _mat, _removed, _dt, _c}; }
 
-AddOn& DemSolver::add_addon(std::unique_ptr<AddOn> a)
+AddOn& DemSolver::add_addon(std::unique_ptr<AddOn> a) { return insert_addon(std::move(a), false); }
+
+AddOn& DemSolver::insert_addon(std::unique_ptr<AddOn> a, bool first)
 {
   const std::string name = a ? a->name() : std::string();
   if (_started)
@@ -25,8 +27,6 @@ AddOn& DemSolver::add_addon(std::unique_ptr<AddOn> a)
   for (const auto& o : _addons)
     if (o->name() == name)
       throw std::runtime_error("add-on '" + name + "': the name is in use");
-  // the bodies come first: the bars' forces act on them after their contacts
-  const bool first = dynamic_cast<impl::BodyAddOn*>(a.get()) != nullptr;
   auto at = _addons.insert(first ? _addons.begin() : _addons.end(), std::move(a));
   return **at;
 }
@@ -36,7 +36,8 @@ std::size_t DemSolver::add_body(RigidBody b)
   if (_started)
     throw std::runtime_error("rigid body '" + b.name + "': bodies are added before start()");
   if (!_bodies)
-    _bodies = static_cast<impl::BodyAddOn*>(&add_addon(std::make_unique<impl::BodyAddOn>()));
+    // the bodies come first: the bars' forces act on them after their contacts
+    _bodies = static_cast<impl::BodyAddOn*>(&insert_addon(std::make_unique<impl::BodyAddOn>(), true));
   return _bodies->add(std::move(b));
 }
 

@@ -3,6 +3,8 @@
 #include "dembridge/shell/gmsh.h"
 #include "mesh_internal.h"
 
+#include "dembridge/core/text.h"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -17,12 +19,7 @@ namespace dembridge::shell
 {
 namespace
 {
-std::string text(double v)
-{
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
+using core::number_text;
 
 /// Gmsh's global state for one use: initialised quietly, finalised on exit
 /// (exceptions included).
@@ -116,29 +113,29 @@ void SlabOutline::validate() const
 {
   for (auto [name, v] : {std::pair{"slab length lx", lx}, {"slab width ly", ly}, {"element size", size}})
     if (!(v > 0.0) || !std::isfinite(v))
-      throw std::runtime_error(std::string(name) + " " + text(v) + " m: must be > 0");
+      throw std::runtime_error(std::string(name) + " " + number_text(v) + " m: must be > 0");
   if (size > std::min(lx, ly))
-    throw std::runtime_error("element size " + text(size) + " m: must not exceed the slab's shorter side, "
-                             + text(std::min(lx, ly)) + " m");
+    throw std::runtime_error("element size " + number_text(size) + " m: must not exceed the slab's shorter side, "
+                             + number_text(std::min(lx, ly)) + " m");
   std::array<double, 2> reach{0.0, 0.0};
   if (hole == Hole::rectangle)
   {
     if (!(half[0] > 0.0 && half[1] > 0.0))
-      throw std::runtime_error("hole half sizes " + text(half[0]) + " x " + text(half[1]) + " m: both must be > 0");
+      throw std::runtime_error("hole half sizes " + number_text(half[0]) + " x " + number_text(half[1]) + " m: both must be > 0");
     reach = half;
   }
   else if (hole == Hole::circle)
   {
     if (!(radius > 0.0) || !std::isfinite(radius))
-      throw std::runtime_error("hole radius " + text(radius) + " m: must be > 0");
+      throw std::runtime_error("hole radius " + number_text(radius) + " m: must be > 0");
     reach = {radius, radius};
   }
   if (hole != Hole::none
       && !(centre[0] - reach[0] > 0.0 && centre[0] + reach[0] < lx && centre[1] - reach[1] > 0.0
            && centre[1] + reach[1] < ly))
-    throw std::runtime_error("the hole about (" + text(centre[0]) + ", " + text(centre[1]) + ") m, reaching "
-                             + text(reach[0]) + " x " + text(reach[1]) + " m, must lie strictly inside the slab [0, "
-                             + text(lx) + "] x [0, " + text(ly) + "] m");
+    throw std::runtime_error("the hole about (" + number_text(centre[0]) + ", " + number_text(centre[1]) + ") m, reaching "
+                             + number_text(reach[0]) + " x " + number_text(reach[1]) + " m, must lie strictly inside the slab [0, "
+                             + number_text(lx) + "] x [0, " + number_text(ly) + "] m");
 }
 
 std::shared_ptr<dolfinx::mesh::Mesh> mesh_outline(MPI_Comm comm, const SlabOutline& o, Cell cell, const Placement& p)
@@ -172,8 +169,8 @@ std::shared_ptr<dolfinx::mesh::Mesh> mesh_outline(MPI_Comm comm, const SlabOutli
   }
   catch (...)
   {
-    throw std::runtime_error("Gmsh could not mesh the slab's outline (" + text(o.lx) + " x " + text(o.ly)
-                             + " m, element size " + text(o.size) + " m)");
+    throw std::runtime_error("Gmsh could not mesh the slab's outline (" + number_text(o.lx) + " x " + number_text(o.ly)
+                             + " m, element size " + number_text(o.size) + " m)");
   }
   return from_model(comm, p, "the Gmsh mesh of the slab's outline");
 }

@@ -154,7 +154,8 @@ private:
   void own_critical_steps();                        // each side's, unweighted
   void weigh_fe(const CouplingOptions& o);          // weight field, FE masses
   void weigh_de(const CouplingOptions& o);          // masses, sphere and link weights
-  void refuse_beyond(const Overlap& overlap) const; // no sphere past the band's FE edge
+  // no point of x (3 per point) past the band's FE edge: refused naming `what`
+  static void refuse_beyond(const Overlap& overlap, std::span<const double> x, const char* what, const char* advice);
   void weigh_bars(const CouplingOptions& o);        // the bars' masses, areas, springs, bonds
   void locate_overlap();                            // G_FE of the overlap's particles and bar nodes
   CouplingOperator locate_points(const std::vector<double>& pts) const;

@@ -199,6 +199,7 @@ private:
   impl::BodyAddOn* _bodies = nullptr;
   impl::BarAddOn* _bars = nullptr;
   StepView view() const; // (_p and _l are references: the view may change them)
+  AddOn& insert_addon(std::unique_ptr<AddOn> a, bool first); // add_addon's checks; first: ahead of the others
   void save_addons(const checkpoint::Group& g) const;
   void load_addons(const checkpoint::Group& g);
   double _dt, _c, _t = 0.0;
