@@ -1,10 +1,11 @@
 #!/bin/sh
 # Renders docs/impact.png, the picture on README.md, from the main demo's own
-# output: the shipped scenario `small` at 1 mm mean radius (as scripts/demo.sh
-# runs it), cut along the projectile's path at three moments. Builds the
-# impact demo first if it is missing.
+# output: the shipped coupled scenario `small-slab` (as scripts/demo.sh runs
+# it): the DE core cut along the projectile's path at three moments, the
+# slab from above and the shells' deflection. Builds the impact demo first
+# if it is missing.
 #   sh scripts/impact_picture.sh                        # into docs/impact.png
-#   sh scripts/impact_picture.sh DIR PNG [impact options] # e.g. --set target.mean_radius_m=0.002
+#   sh scripts/impact_picture.sh DIR PNG [impact options] # e.g. --set projectile.velocity_m_s=400
 # IMPACT=path picks another impact executable (the test suite sets it).
 set -eu
 cd "$(dirname "$0")/.."
@@ -18,5 +19,5 @@ if [ ! -x "$impact" ]; then
   [ -f build/CMakeCache.txt ] || cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
   cmake --build build -j"$(nproc)" --target impact
 fi
-"$impact" small --set target.mean_radius_m=0.001 --plot 0 --output "$dir" --summary "$dir/summary.json" "$@"
-/usr/bin/python3 scripts/render_impact.py "$dir" "$png"
+"$impact" small-slab --plot 0 --output "$dir" --summary "$dir/summary.json" "$@"
+/usr/bin/python3 scripts/render_slab.py "$dir" "$png"

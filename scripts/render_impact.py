@@ -47,6 +47,15 @@ def hull(points):
     return lower[:-1] + upper[:-1]
 
 
+def write_figures(summary, out_png):
+    """The figures the picture shows, beside it as OUT.json
+    (tests/check_picture.py compares them with a fresh run and with
+    README.md's caption)."""
+    figures = {k: summary[k] for k in ("scenario", "particles", "striking_velocity_m_s", "outcome")}
+    figures["residual_velocity_m_s"] = round(summary["residual_velocity_m_s"])
+    Path(out_png).with_suffix(".json").write_text(json.dumps(figures, indent=2) + "\n")
+
+
 def main(run_dir, out_png):
     run = Path(run_dir)
     summary = json.loads((run / "summary.json").read_text())
@@ -84,11 +93,7 @@ def main(run_dir, out_png):
     fig.suptitle(f"{summary['scenario']}: {summary['striking_velocity_m_s']:g} m/s, residual "
                  f"{summary['residual_velocity_m_s']:.0f} m/s, {summary['particles']} spheres (cut at y = 0)")
     fig.savefig(out_png, dpi=110, bbox_inches="tight")
-    # the figures the picture shows, beside it (tests/check_picture.py
-    # compares them with a fresh run and with README.md's caption)
-    figures = {k: summary[k] for k in ("scenario", "particles", "striking_velocity_m_s", "outcome")}
-    figures["residual_velocity_m_s"] = round(summary["residual_velocity_m_s"])
-    Path(out_png).with_suffix(".json").write_text(json.dumps(figures, indent=2) + "\n")
+    write_figures(summary, out_png)
 
 
 if __name__ == "__main__":

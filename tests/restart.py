@@ -35,7 +35,8 @@ import time
 import h5py
 import numpy as np
 
-SKIP = {"wall_s", "restarted_from_step", "step_time_s", "de_step_split_s"}
+SKIP = {"wall_s", "restarted_from_step", "step_time_s", "de_step_split_s", "shell_setup_s", "shells_and_bridge_share",
+        "peak_memory_mb"}
 
 
 def run(cmd):

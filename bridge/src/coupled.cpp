@@ -295,9 +295,10 @@ void CoupledSolver::coupled_time_step(const CouplingOptions& o, const dem::Mater
         z[nf + 3 * _ids[q] + d] = v[3 * q + d];
   };
   _dt_coupled = 2.0 / std::sqrt(core::max_eigenvalue(mass, f_all, 1e-6, 20000, project));
-  if (bars)
+  if (_bars.nodes() > 0 || o.body_contacts)
   {
-    // what the multipliers leave free, the bars' elements and bonds with it
+    // what the multipliers leave free, with one body contact per sphere and
+    // the bars' elements and bonds
     std::vector<std::uint8_t> tied_spheres(np, 0), tied_nodes(_bars.nodes(), 0);
     for (auto i : _ids)
       tied_spheres[i] = 1;

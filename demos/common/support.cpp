@@ -1,5 +1,7 @@
 #include "support.h"
 
+#include <sys/resource.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <csignal>
@@ -183,6 +185,13 @@ static double now()
   return std::chrono::duration<double>(
              std::chrono::steady_clock::now().time_since_epoch())
       .count();
+}
+
+double peak_memory_mb()
+{
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_maxrss) / 1024.0; // Linux: KiB
 }
 
 Stopwatch::Stopwatch() : _t0(now()) {}

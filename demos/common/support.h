@@ -104,6 +104,9 @@ double crossing_frequency(std::span<const double> t, std::span<const double> s);
 double amplitude(std::span<const double> s);
 
 /// Wall-clock seconds since construction.
+/// The process's peak resident memory so far [MiB] (getrusage's ru_maxrss).
+double peak_memory_mb();
+
 class Stopwatch
 {
 public:

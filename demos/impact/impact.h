@@ -4,6 +4,7 @@
 /// run of the impact demo, as a function the demo and the tests share.
 
 #include "scenario.h"
+#include "slab_coupling.h"
 
 #include "dembridge/dem/assembly.h"
 
@@ -25,6 +26,9 @@ struct ImpactConfig
   bool quiet = false;
   /// Checkpoints and restart (restart.h); null: neither.
   const RestartOptions* restart = nullptr;
+  /// Builds the coupled slab of a scenario with shells.model = "coupled"
+  /// (make_slab_coupling, coupled_slab.h); empty: such a scenario is refused.
+  SlabCouplingFactory coupling;
 };
 
 /// The craters measured on the slab (docs/impact.md, "Measurements"). A

@@ -10,6 +10,8 @@
 // Output: DIR/particles.xdmf (+ .h5: the spheres with damage and velocity,
 // the broken links as cracks, the projectile's surface), DIR/history.csv,
 // DIR/history.png, DIR/scenario.json (every key as used), DIR/packing.txt.
+#include "coupled_slab.h"
+#include "fe_runtime.h"
 #include "impact.h"
 #include "options.h"
 #include "support.h"
@@ -35,15 +37,17 @@ int main(int argc, char** argv)
 {
   using namespace dembridge;
   demo::ImpactConfig c;
-  std::string scenario, summary;
+  std::string scenario, summary, model;
   std::vector<std::string> sets;
   bool keys = false;
   int plot = 1;
   CLI::App app{"A rigid projectile striking a slab of DE concrete", "impact"};
   app.add_option("scenario", scenario,
-                 "scenario file (TOML), or the name of a shipped one: small, small-rc, hanchak-48, semi-infinite");
+                 "scenario file (TOML), or the name of a shipped one: small, small-rc, small-slab, hanchak-48, semi-infinite");
   app.add_option("--set", sets, "override a scenario key: section.key=value (TOML value), e.g. "
                                 "projectile.velocity_m_s=600; repeatable");
+  demo::add_choice(app, "--model", model, "the slab's model, as the scenario key shells.model: de = all spheres, "
+                   "coupled = a DE core tied to reinforced-concrete shells; \"\" = the scenario's", "de | coupled");
   app.add_flag("--keys", keys, "print every scenario key with its unit, default and allowed values, and exit");
   demo::add_integer(app, "--plot", plot, "1: write DIR/history.png with matplotlib, 0: no", demo::Allowed::closed(0, 1));
   demo::RestartOptions restart;
@@ -57,12 +61,14 @@ int main(int argc, char** argv)
   }
   if (scenario.empty())
   {
-    std::cerr << "error: scenario: give a scenario file or a shipped scenario's name (small, small-rc, hanchak-48, "
+    std::cerr << "error: scenario: give a scenario file or a shipped scenario's name (small, small-rc, small-slab, hanchak-48, "
                  "semi-infinite); --keys lists the keys" << std::endl;
     return 2;
   }
   try
   {
+    if (!model.empty())
+      sets.push_back("shells.model=\"" + model + "\"");
     c.scenario = demo::read_scenario(scenario_path(scenario), sets);
   }
   catch (const std::exception& e)
@@ -71,12 +77,13 @@ int main(int argc, char** argv)
     return 2;
   }
   // the run is defined by the scenario's values, not by the file's name
-  if (const int rc = demo::record_setup(app, restart, {"scenario", "--set", "--keys", "--plot"}); rc >= 0)
+  if (const int rc = demo::record_setup(app, restart, {"scenario", "--set", "--model", "--keys", "--plot"}); rc >= 0)
     return rc;
   for (const auto& [key, value] : c.scenario.resolved.items())
     restart.setup[key] = value.dump();
   c.restart = &restart;
   c.plot = plot == 1;
+  c.coupling = demo::make_slab_coupling;
 
   return demo::run_guarded(argc, argv, [&]
   {
@@ -93,5 +100,5 @@ int main(int argc, char** argv)
       if (demo::run_plot_script("plot_impact.py", c.output_dir, "history.csv is"))
         std::cout << "plot: " << (std::filesystem::path(c.output_dir) / "history.png").string() << "\n";
     }
-  }, summary);
+  }, summary, c.scenario.shells.coupled() ? demo::petsc_runtime() : demo::Runtime{});
 }

@@ -132,7 +132,7 @@ public:
         bool ok = false;
         std::istringstream in(choices);
         for (std::string c; in >> c;)
-          ok = ok || (c != "|" && c == v);
+          ok = ok || (c != "|" && (c == v || (c == "\"\"" && v.empty())));
         if (!ok)
           fail(key, "= \"" + v + "\": allowed " + choices);
       }
@@ -517,6 +517,33 @@ RunSpec read_run(Reader& r)
   return s;
 }
 
+ShellSpec read_shells(Reader& r)
+{
+  r.section("shells", "the slab's model: all DE, or a DE core round the impact coupled to reinforced-concrete "
+                      "shells over the rest (docs/impact.md, \"Coupled slabs\")");
+  ShellSpec s;
+  s.model = r.text("model", s.model, "de | coupled",
+                   "de: the whole slab of spheres; coupled: spheres in the core and its band only, shells of the "
+                   "concrete's E and nu with the mats' steel as layers elsewhere (impact --model sets it)");
+  s.core = r.text("core", s.core, "cylinder | box", "the DE core's shape, through the thickness, centred on "
+                                                     "projectile.aim_m");
+  s.core_radius = r.number("core_radius_m", s.core_radius, Allowed::positive(100.0).or_value(0.0, "none"),
+                           "cylinder core's radius (needed with model coupled and core cylinder) [m]");
+  s.core_size = r.numbers<2>("core_size_m", s.core_size, Allowed::non_negative(100.0),
+                             "box core's sizes along x and y (needed with model coupled and core box) [m]");
+  s.band = r.number("band_m", s.band, Allowed::positive(100.0).or_value(0.0, "8 target.mean_radius_m"),
+                    "width of the overlap round the core, where spheres and shells share the slab [m]");
+  s.element_size = r.number("element_size_m", s.element_size, Allowed::positive(100.0).or_value(0.0, "band_m / 2"),
+                            "the shells' element size (Gmsh; at most band_m) [m]");
+  s.cell = r.text("cell", s.cell, "quadrilateral | triangle", "the shells' elements");
+  s.edges = r.text("edges", s.edges, "\"\" | free | simply-supported | clamped",
+                   "the shells' outer edges; \"\" = as target.supports (sides: clamped, rear-edges: simply "
+                   "supported, none: free)");
+  s.weight_floor = r.number("weight_floor", s.weight_floor, Allowed::open(0.0, 1.0),
+                            "floor of the weighted masses in the overlap [-]");
+  return s;
+}
+
 Scenario read_sections(Reader& r, const std::filesystem::path& file)
 {
   Scenario s;
@@ -528,6 +555,7 @@ Scenario read_sections(Reader& r, const std::filesystem::path& file)
   s.reinforcement = read_reinforcement(r, s.material);
   s.projectile = read_projectile(r);
   s.run = read_run(r);
+  s.shells = read_shells(r);
   s.resolved = r.resolved();
   s.resolved["material.file"] = s.material.file;
   if (!s.target.packing_file.empty())
@@ -582,7 +610,7 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
   toml::table root;
   if (!std::filesystem::is_regular_file(file))
     throw std::runtime_error("scenario " + file.string() + ": no such file (give a scenario file, or the name of "
-                             "a shipped one: small, small-rc, hanchak-48, semi-infinite)");
+                             "a shipped one: small, small-rc, small-slab, hanchak-48, semi-infinite)");
   try
   {
     root = toml::parse_file(file.string());

@@ -103,6 +103,23 @@ struct RunSpec
   double skin = 0.0;           ///< neighbour-list skin [m]; 0 = half the smallest radius
 };
 
+/// The slab's model (docs/impact.md, "Coupled slabs"): all DE, or a DE core
+/// where the projectile strikes tied to reinforced-concrete shells over the
+/// rest of the slab (bridge/slab.h).
+struct ShellSpec
+{
+  std::string model = "de";        ///< de | coupled
+  std::string core = "cylinder";   ///< cylinder | box, through the thickness, centred on projectile.aim_m
+  double core_radius = 0.0;        ///< cylinder [m]
+  std::array<double, 2> core_size{0.0, 0.0}; ///< box, along x and y [m]
+  double band = 0.0;               ///< the overlap's width round the core [m]; 0 = 8 mean radii
+  double element_size = 0.0;       ///< the shells' [m]; 0 = band / 2
+  std::string cell = "quadrilateral"; ///< quadrilateral | triangle
+  std::string edges;               ///< free | simply-supported | clamped; "" = from target.supports
+  double weight_floor = 1e-3;      ///< of the weighted masses (bridge::CouplingOptions) [-]
+  bool coupled() const { return model == "coupled"; }
+};
+
 struct Scenario
 {
   std::filesystem::path file;
@@ -112,6 +129,7 @@ struct Scenario
   ReinforcementSpec reinforcement;
   ProjectileSpec projectile;
   RunSpec run;
+  ShellSpec shells;
   /// Every key with the value used (defaults included), "section.key" ->
   /// value: echoed at the start, written to the summary, compared on restart.
   nlohmann::json resolved;

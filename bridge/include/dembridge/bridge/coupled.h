@@ -41,6 +41,12 @@ struct CouplingOptions
   double damping_fe = 0.0;      ///< mass-proportional damping of the shell [1/s]
   double damping_de = 0.0;      ///< velocity-proportional damping of the spheres [1/s]
   double skin = 0.0;            ///< DEM neighbour skin [m]; 0 = Rmin / 2
+  /// Rigid bodies will strike the spheres (dem::DemSolver::add_body on
+  /// de()): the step is also bounded by the Gershgorin bound of the spheres
+  /// the multipliers leave free, each with one body contact on top of its
+  /// links (dem::critical_time_step with a material), as a DE run with
+  /// bodies is. Always so with bars.
+  bool body_contacts = false;
 };
 
 /// Energy of the coupled system [J]: the FE and DE budgets of each side
