@@ -3,7 +3,7 @@
 # 20 mm steel ogive perforating a reinforced-concrete slab (0.6 x 0.6 m,
 # 40 mm thick) at 300 m/s, the concrete round the impact discrete elements
 # coupled to reinforced-concrete shells over the rest (the shipped scenario
-# `small-slab`: 5,107 spheres and 4,368 shell nodes, about 10 s on 2 cores).
+# `small-slab`: 5,107 spheres and 1,024 shell nodes, about 5 s on 2 cores).
 # Idempotent: a second call rebuilds nothing and only reruns the demo.
 # Extra arguments go to the demo (e.g. --set projectile.velocity_m_s=400,
 # or --model de for the slab all in spheres).

@@ -740,6 +740,128 @@ TEST_CASE("wave transmission: a pulse crosses the overlap with little reflection
   CHECK(arrived_back > 0.8);
 }
 
+namespace
+{
+/// The shells' state of a strip of 5 mm quadrilaterals, 0.05 m wide and
+/// thick, after `steps` steps from the bending pulse w(x) (a cosine bell
+/// 12 cm long about x = 0.1 m, at rest): alone on [0, 0.5] m, or on [0, 0.3]
+/// coupled to spheres of 3 mm on [0.22, 0.5] m (the strip of the pulse test
+/// above). Returns the velocities of the nodes with x < 0.21 m, node by
+/// node in order of x then y, and their lumped masses; `e0` the pulse's
+/// energy.
+struct StripState
+{
+  std::vector<double> v, m;
+  double e0 = 0.0, dt = 0.0;
+  int steps = 0;
+};
+
+/// `duration` [s] at the coupled step; alone, `steps` steps of `dt`.
+StripState bending_strip(bool coupled, double duration, int steps = 0, double dt = 0.0)
+{
+  const double w = 0.05, h = 0.05, L = 0.5, xfe = 0.3, xde = 0.22, A = 1e-6, lp = 0.12, x0 = 0.1;
+  shell::Material sm;
+  sm.thickness = h;
+  const auto mf = dem::read_material(DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json");
+  sm.youngs_modulus = mf.macroscopic.value("youngs_modulus_pa", 30e9);
+  sm.poisson_ratio = mf.macroscopic.value("poisson_ratio", 0.2);
+  const double length = coupled ? xfe : L;
+  shell::FEModel fe(shell::create_shell_rectangle(MPI_COMM_WORLD, length, w, static_cast<int>(std::round(length / 0.005)),
+                                                  10, shell::Cell::quadrilateral),
+                    sm);
+  const auto x = fe.node_coordinates();
+  std::vector<double> u(fe.num_dofs(), 0.0), v(fe.num_dofs(), 0.0);
+  for (std::size_t k = 0; k < fe.num_nodes(); ++k)
+  {
+    const double d = x[3 * k] - x0;
+    if (std::abs(d) < 0.5 * lp)
+    {
+      u[6 * k + 2] = 0.5 * A * (1.0 + std::cos(2.0 * std::numbers::pi * d / lp));
+      u[6 * k + 4] = 0.5 * A * 2.0 * std::numbers::pi / lp * std::sin(2.0 * std::numbers::pi * d / lp); // -dw/dx
+    }
+  }
+  StripState out;
+  auto read = [&](std::span<const double> vel, const std::vector<double>& mass)
+  {
+    std::vector<std::size_t> order;
+    for (std::size_t k = 0; k < fe.num_nodes(); ++k)
+      if (x[3 * k] < xde - 0.01)
+        order.push_back(k);
+    std::sort(order.begin(), order.end(), [&](auto a, auto b)
+              { return std::pair{x[3 * a], x[3 * a + 1]} < std::pair{x[3 * b], x[3 * b + 1]}; });
+    for (auto k : order)
+      for (int d = 0; d < 6; ++d)
+      {
+        out.v.push_back(vel[6 * k + d]);
+        out.m.push_back(mass[6 * k + d]);
+      }
+  };
+  if (!coupled)
+  {
+    out.steps = steps;
+    shell::ExplicitSolver s(fe.lumped_mass(), fe.internal_force_fn(), dt);
+    s.set_state(u, v);
+    out.e0 = s.energy().initial;
+    for (int k = 0; k < steps; ++k)
+      s.step();
+    read(s.v(), fe.lumped_mass());
+    return out;
+  }
+  dem::PackingOptions po;
+  po.mean_radius = 3e-3;
+  const auto region = dem::box_region({xde, 0, -0.5 * h}, {L, w, 0.5 * h});
+  const auto pk = dem::generate_packing(region, po);
+  double solid = 0.0;
+  for (double r : pk.r)
+    solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  dem::Material mat = mf.material;
+  mat.tensile = mat.cohesion = 1e12;
+  auto p = dem::make_particles(pk.x, pk.r, mat.density, solid / region.volume);
+  auto l = dem::create_links(p, dem::lambda_for_mean_links(p.x, p.r, 12.0), mat);
+  bridge::CouplingOptions o;
+  o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, xfe, xde};
+  bridge::CoupledSolver s(fe, p, l, mat, o);
+  out.dt = s.dt();
+  out.steps = static_cast<int>(duration / s.dt());
+  s.start(u, v);
+  out.e0 = s.energy().total();
+  for (int k = 0; k < out.steps; ++k)
+    s.step(false);
+  s.observe();
+  read(s.fe().v(), fe.lumped_mass());
+  return out;
+}
+} // namespace
+
+TEST_CASE("wave transmission: a bending pulse crosses the overlap with little reflection", "[bridge][coupled]")
+{
+  // A bending pulse (w a cosine bell 12 cm long, at rest, with the matching
+  // rotation) splits into two waves; the right-going one crosses the 8 cm
+  // overlap into the spheres. Bending waves disperse, and part of the bell
+  // lingers, so the energy left in the FE-only region says nothing alone:
+  // the reflection is the kinetic energy of the difference between the
+  // coupled strip's shells and the all-shell strip's, node by node in the
+  // FE-only region (x < 0.21 m), times 2 (a wave's energy is half kinetic),
+  // over the energy the right-going wave carries (half the pulse's). Bound
+  // 5 %, as for the membrane pulse; measured 2.9 %. Shorter pulses reflect
+  // more (6, 8, 12, 16 cm: 6.9, 6.1, 2.9, 1.9 %; validation.md 5.5): the
+  // bound holds for bending waves 1.5 overlap widths long and longer. The
+  // run lasts until the fastest part, at the shear wave speed, has crossed
+  // the overlap and come back to the FE-only region.
+  const double c_shear = std::sqrt(30e9 / (2.0 * 1.2 * 2400.0));
+  const auto coupled = bending_strip(true, (0.18 + 0.24) / c_shear);
+  const auto alone = bending_strip(false, 0.0, coupled.steps, coupled.dt);
+  const int steps = coupled.steps;
+  REQUIRE(coupled.v.size() == alone.v.size());
+  double ke = 0.0;
+  for (std::size_t i = 0; i < coupled.v.size(); ++i)
+    ke += 0.5 * coupled.m[i] * (coupled.v[i] - alone.v[i]) * (coupled.v[i] - alone.v[i]);
+  const double reflected = 2.0 * ke / (0.5 * alone.e0);
+  INFO("bending pulse FE -> DE: " << steps << " steps; reflected " << reflected << " of the right-going wave's energy");
+  CHECK(reflected < 0.05);
+  CHECK(std::abs(coupled.e0 / alone.e0 - 1.0) < 1e-6); // the same pulse in both
+}
+
 TEST_CASE("the coupled model rotated and moved in space gives the same results", "[bridge][coupled]")
 {
   // Same bar, same packing, rigidly placed elsewhere; same time step. The

@@ -379,7 +379,8 @@ double CoupledSolver::step(bool observed)
   // projected anyway), but v(n+1) -- written out, and in the kinetic
   // energy -- then satisfies the constraint instead of carrying the
   // unconstrained dt/2 a of the lightest (floored) masses.
-  if (observed || _fe_solver->damping() > 0.0 || _de_solver->damping() > 0.0)
+  _projected = observed || _fe_solver->damping() > 0.0 || _de_solver->damping() > 0.0;
+  if (_projected)
     correct(false, false);
   const double t6 = now_s();
   _time.fe += (t1 - t0) + (t4 - t3);
@@ -388,6 +389,16 @@ double CoupledSolver::step(bool observed)
   if (_guard.due(_de_solver->steps()))
     check_energy();
   return _residual;
+}
+
+void CoupledSolver::observe()
+{
+  if (_projected)
+    return;
+  const double t0 = now_s();
+  correct(false, false);
+  _projected = true;
+  _time.multipliers += now_s() - t0;
 }
 
 void CoupledSolver::check_energy() const

@@ -69,6 +69,7 @@ std::shared_ptr<dolfinx::mesh::Mesh> slab_shells(MPI_Comm comm, const SlabSpec& 
   o.lx = s.size[0];
   o.ly = s.size[1];
   o.size = s.element_size;
+  o.outer_size = s.outer_element_size;
   o.centre = {s.centre[0] + 0.5 * s.size[0], s.centre[1] + 0.5 * s.size[1]}; // the outline's frame: [0, l]
   if (s.core == SlabSpec::Core::box)
   {

@@ -152,9 +152,11 @@ public:
     _cs->start(zero, zero);
   }
 
-  double step() override
+  void observe() override { _cs->observe(); }
+
+  double step(bool observed) override
   {
-    const double r = _cs->step(true);
+    const double r = _cs->step(observed);
     _worst = std::max(_worst, r);
     return r;
   }
@@ -219,6 +221,7 @@ public:
     return {{"core", _overlap.what()},
             {"band_m", _spec.band},
             {"element_size_m", _spec.element_size},
+            {"outer_element_size_m", _spec.outer_element_size > 0.0 ? _spec.outer_element_size : _spec.element_size},
             {"edges", edges[static_cast<int>(_spec.edges)]},
             {"shell_nodes", _fe->num_nodes()},
             {"shell_cells", _fe->num_cells()},
@@ -309,6 +312,7 @@ bridge::SlabSpec slab_spec(const Scenario& s)
   }
   sp.band = sh.band > 0.0 ? sh.band : 8.0 * t.mean_radius;
   sp.element_size = sh.element_size > 0.0 ? sh.element_size : 0.5 * sp.band;
+  sp.outer_element_size = sh.outer_element_size;
   sp.cell = sh.cell == "triangle" ? shell::Cell::triangle : shell::Cell::quadrilateral;
   const std::string edges = !sh.edges.empty()             ? sh.edges
                             : t.supports == "sides"       ? "clamped"

@@ -243,11 +243,14 @@ void ImpactRun::loop()
                       .print_seconds = 2.0,
                       .checkpoints = _ckpt.get()};
   LoopHooks h = solver_hooks(*_solver);
-  if (_coupling)
-    h.step = [this](std::int64_t) { _residual = _coupling->step(); };
+  if (_coupling) // the steps whose state is read project their velocities
+    h.step = [this, frame_every](std::int64_t k)
+    { _residual = _coupling->step(k % _history_every == 0 || k % frame_every == 0 || k == _nsteps); };
   h.finished = [this](std::int64_t)
   {
     _outcome = outcome();
+    if (_outcome != Outcome::running && _coupling)
+      _coupling->observe(); // the last step's state is read
     return _outcome != Outcome::running;
   };
   h.row = [this](std::int64_t, bool) { write_row(); };

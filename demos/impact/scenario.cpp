@@ -535,6 +535,10 @@ ShellSpec read_shells(Reader& r)
                     "width of the overlap round the core, where spheres and shells share the slab [m]");
   s.element_size = r.number("element_size_m", s.element_size, Allowed::positive(100.0).or_value(0.0, "band_m / 2"),
                             "the shells' element size (Gmsh; at most band_m) [m]");
+  s.outer_element_size = r.number("outer_element_size_m", s.outer_element_size,
+                                  Allowed::positive(100.0).or_value(0.0, "element_size_m"),
+                                  "the shells' element size at the slab's corners, graded from element_size_m at the "
+                                  "core [m]");
   s.cell = r.text("cell", s.cell, "quadrilateral | triangle", "the shells' elements");
   s.edges = r.text("edges", s.edges, "\"\" | free | simply-supported | clamped",
                    "the shells' outer edges; \"\" = as target.supports (sides: clamped, rear-edges: simply "

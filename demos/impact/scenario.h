@@ -113,7 +113,8 @@ struct ShellSpec
   double core_radius = 0.0;        ///< cylinder [m]
   std::array<double, 2> core_size{0.0, 0.0}; ///< box, along x and y [m]
   double band = 0.0;               ///< the overlap's width round the core [m]; 0 = 8 mean radii
-  double element_size = 0.0;       ///< the shells' [m]; 0 = band / 2
+  double element_size = 0.0;       ///< the shells' at the core [m]; 0 = band / 2
+  double outer_element_size = 0.0; ///< at the slab's corners, graded [m]; 0 = element_size
   std::string cell = "quadrilateral"; ///< quadrilateral | triangle
   std::string edges;               ///< free | simply-supported | clamped; "" = from target.supports
   double weight_floor = 1e-3;      ///< of the weighted masses (bridge::CouplingOptions) [-]

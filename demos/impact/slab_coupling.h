@@ -58,8 +58,13 @@ public:
   virtual double dt_critical() const = 0; ///< the coupled step's bound [s]
   /// Starts both sides (the shells at rest).
   virtual void start() = 0;
-  /// One coupled step; returns the constraint's residual [m/s].
-  virtual double step() = 0;
+  /// One coupled step; returns the constraint's residual [m/s]. Unless
+  /// `observed` (a step whose state is read: a row, a frame), v(n+1) is
+  /// not projected onto the constraint (bridge::CoupledSolver::step) and
+  /// the residual is the last observed step's.
+  virtual double step(bool observed) = 0;
+  /// Projects v(n+1) after a step that was not observed (the last one).
+  virtual void observe() = 0;
   virtual ShellsEnergy energy() const = 0;
   virtual double max_deflection() const = 0;   ///< largest |u_z| of the shells [m]
   virtual double support_reaction() const = 0; ///< the supports' force along z on the shells [N]

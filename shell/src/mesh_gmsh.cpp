@@ -114,9 +114,12 @@ void SlabOutline::validate() const
   for (auto [name, v] : {std::pair{"slab length lx", lx}, {"slab width ly", ly}, {"element size", size}})
     if (!(v > 0.0) || !std::isfinite(v))
       throw std::runtime_error(std::string(name) + " " + number_text(v) + " m: must be > 0");
-  if (size > std::min(lx, ly))
-    throw std::runtime_error("element size " + number_text(size) + " m: must not exceed the slab's shorter side, "
-                             + number_text(std::min(lx, ly)) + " m");
+  for (auto [name, v] : {std::pair{"element size", size}, {"outer element size", outer_size}})
+    if (v > std::min(lx, ly))
+      throw std::runtime_error(std::string(name) + " " + number_text(v) + " m: must not exceed the slab's shorter side, "
+                               + number_text(std::min(lx, ly)) + " m");
+  if (!(outer_size >= 0.0))
+    throw std::runtime_error("outer element size " + number_text(outer_size) + " m: must be >= 0 (0: the element size)");
   std::array<double, 2> reach{0.0, 0.0};
   if (hole == Hole::rectangle)
   {
@@ -144,7 +147,8 @@ std::shared_ptr<dolfinx::mesh::Mesh> mesh_outline(MPI_Comm comm, const SlabOutli
   if (cell != Cell::triangle && cell != Cell::quadrilateral)
     throw std::runtime_error("a shell mesh needs triangles or quadrilaterals, not " + to_string(cell));
   GmshSession session;
-  std::vector<int> loops{polygon({{0.0, 0.0}, {o.lx, 0.0}, {o.lx, o.ly}, {0.0, o.ly}}, o.size)};
+  const double outer = o.outer_size > 0.0 ? o.outer_size : o.size;
+  std::vector<int> loops{polygon({{0.0, 0.0}, {o.lx, 0.0}, {o.lx, o.ly}, {0.0, o.ly}}, outer)};
   if (o.hole == SlabOutline::Hole::rectangle)
   {
     const auto c = o.centre, h = o.half;
@@ -156,7 +160,7 @@ std::shared_ptr<dolfinx::mesh::Mesh> mesh_outline(MPI_Comm comm, const SlabOutli
     loops.push_back(circle(o.centre, o.radius, o.size));
   gmsh::model::geo::addPlaneSurface(loops);
   gmsh::model::geo::synchronize();
-  gmsh::option::setNumber("Mesh.MeshSizeMax", o.size);
+  gmsh::option::setNumber("Mesh.MeshSizeMax", std::max(o.size, outer));
   if (cell == Cell::quadrilateral)
   {
     gmsh::option::setNumber("Mesh.Algorithm", 6); // frontal-Delaunay (8, its quadrilateral variant, crashes in Gmsh 4.8)

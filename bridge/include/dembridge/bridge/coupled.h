@@ -127,6 +127,11 @@ public:
   ///  - the residual's pass over the points: the return value is then the
   ///    residual of the last observed step (0 before any).
   double step(bool observed = true);
+  /// After a step(false): projects v(n+1) onto the constraint as an observed
+  /// step would have (a run that learns only after its step that it is
+  /// over, and reads its state). Positions are not touched; nothing to do
+  /// after an observed step.
+  void observe();
 
   double dt() const { return _dt; }
   /// Critical step of the coupled, weighted system [s]: 2 / sqrt(lambda_max)
@@ -185,6 +190,7 @@ private:
   void check_energy() const; // the energy guard
   double _dt = 0.0, _dt_coupled = 0.0, _dt_fe = 0.0, _dt_de = 0.0, _multiplier_energy = 0.0,
          _residual = 0.0;
+  bool _projected = true; // v(n+1) projected at the last step
 };
 
 } // namespace dembridge::bridge

@@ -42,7 +42,8 @@ struct SlabSpec
   std::array<double, 2> core_half{0.0, 0.0}; ///< a box core's half sizes [m]
   double core_radius = 0.0;                  ///< a cylinder core's radius [m]
   double band = 0.0;                         ///< the overlap's width round the core [m]
-  double element_size = 0.0;                 ///< the shells' [m]
+  double element_size = 0.0;                 ///< the shells' at the core [m]
+  double outer_element_size = 0.0;           ///< at the slab's corners, graded from element_size [m]; 0 = uniform
   shell::Cell cell = shell::Cell::quadrilateral;
   Edges edges = Edges::simply_supported;
   /// @throws std::runtime_error naming the value: sizes not > 0, a core

@@ -30,9 +30,13 @@ struct SlabOutline
   std::array<double, 2> centre{0.0, 0.0}; ///< the hole's centre [m]
   std::array<double, 2> half{0.0, 0.0};   ///< a rectangular hole's half sizes [m]
   double radius = 0.0;                    ///< a circular hole's radius [m]
-  double size = 0.0;                      ///< the elements' target size [m]
+  double size = 0.0;                      ///< the elements' target size [m] (at the hole)
+  /// at the outer rectangle's corners [m], the size graded from `size` at
+  /// the hole (Gmsh interpolates the points' sizes); 0 = `size` everywhere
+  double outer_size = 0.0;
   /// @throws std::runtime_error naming the value: lengths or size not > 0, a
-  ///   size above the rectangle's shorter side, a hole not strictly inside.
+  ///   size above the rectangle's shorter side, an outer size below 0 or
+  ///   above the shorter side, a hole not strictly inside.
   void validate() const;
 };
 
