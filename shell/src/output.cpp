@@ -1,6 +1,7 @@
 #include "dembridge/shell/output.h"
 #include "dembridge/shell/model.h"
 
+#include <algorithm>
 #include <fstream>
 #include <hdf5.h>
 #include <iomanip>
@@ -53,6 +54,7 @@ struct XdmfWriter::Impl
   std::string cell;
   std::size_t nodes = 0, cells = 0;
   int npc = 0, bs = 6;
+  bool weighted = false; // the model's energy weight is not 1 everywhere: /mesh/weight
   std::vector<double> times;
   std::vector<double> buffer; // one 3-vector field, (nodes, 3)
 
@@ -92,6 +94,10 @@ XdmfWriter::XdmfWriter(const FEModel& model, const std::filesystem::path& file)
     const auto n = model.nodal_normals();
     write_dataset(I.file, "/mesh/normal", n.data(), H5T_NATIVE_DOUBLE, {I.nodes, 3});
   }
+  const auto eta = model.weight();
+  I.weighted = std::any_of(eta.begin(), eta.end(), [](double e) { return e != 1.0; });
+  if (I.weighted) // a coupled model's weight, as it was when the series began
+    write_dataset(I.file, "/mesh/weight", eta.data(), H5T_NATIVE_DOUBLE, {I.nodes, 1});
   H5Fflush(I.file, H5F_SCOPE_GLOBAL);
   I.write_xdmf();
 }
@@ -110,6 +116,8 @@ XdmfWriter::XdmfWriter(const FEModel& model, const std::filesystem::path& file,
   I.bs = model.block_size();
   I.cell = xdmf_cell(model.is_shell(), I.npc).first;
   resume.read("times", I.times);
+  const auto eta = model.weight();
+  I.weighted = std::any_of(eta.begin(), eta.end(), [](double e) { return e != 1.0; });
   I.file = checkpoint::reopen_frames(I.h5, I.times.size());
   I.write_xdmf();
 }
@@ -196,6 +204,12 @@ void XdmfWriter::Impl::write_xdmf() const
       attribute("rotation", f + "rotation");
       attribute("angular_velocity", f + "angular_velocity");
       attribute("normal", "/mesh/normal");
+    }
+    if (weighted)
+    {
+      x << "  <Attribute Name=\"weight\" AttributeType=\"Scalar\" Center=\"Node\">";
+      item("/mesh/weight", nodes, 1, true);
+      x << "</Attribute>\n";
     }
     x << " </Grid>\n";
   }

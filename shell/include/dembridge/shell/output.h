@@ -6,7 +6,9 @@
 /// (reference coordinates /mesh/geometry, cells /mesh/topology) is written
 /// once; each time step is one grid carrying every field (/frame_k/<field>),
 /// all in 64-bit floats, so one can colour by one field and warp by another.
-/// The file is flushed and the XDMF rewritten at every frame.
+/// The file is flushed and the XDMF rewritten at every frame. A model whose
+/// energy weight (FEModel::weight, a coupled model's) is not 1 everywhere
+/// also gets that weight as a scalar node field, `weight`, in every grid.
 
 #include "dembridge/core/checkpoint.h"
 
