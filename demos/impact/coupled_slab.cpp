@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <stdexcept>
@@ -72,6 +73,7 @@ public:
     : _s(s), _spec(slab_spec(s)), _overlap(bridge::slab_overlap(_spec)), _region(bridge::slab_de_region(_spec))
   {
     warn_path();
+    check_points();
   }
 
   const dem::Region& de_region() const override { return _region; }
@@ -136,6 +138,7 @@ public:
     {
       throw std::runtime_error(std::string("the coupled slab (shells.*, run.dt_s, run.safety_factor): ") + e.what());
     }
+    locate_points();
     _supports = bridge::slab_support_dofs(*_fe, _spec);
     if (!_supports.empty())
       _cs->fe().add_motion({"supports", _supports, shell::MotionKind::fixed, {}});
@@ -185,6 +188,15 @@ public:
     for (std::size_t k = 0; k < _fe->num_nodes(); ++k)
       f += r[bs * k + 2];
     return f;
+  }
+
+  std::vector<double> point_deflections() const override
+  {
+    const auto u = _cs->fe().u();
+    std::vector<double> w;
+    for (auto k : _point_nodes)
+      w.push_back(u[_fe->block_size() * k + 2]);
+    return w;
   }
 
   void open_output(const std::filesystem::path& dir, const checkpoint::Group* root) override
@@ -249,6 +261,44 @@ public:
   }
 
 private:
+  /// shells.deflection_points_m on the shells: inside the slab's plan, not
+  /// in the core (no shell there).
+  void check_points() const
+  {
+    const auto& pts = _s.shells.deflection_points;
+    for (std::size_t q = 0; q < pts.size(); ++q)
+    {
+      const auto& x = pts[q];
+      const std::string at = "shells.deflection_points_m: point " + std::to_string(q) + " (" + number_text(x[0])
+                             + ", " + number_text(x[1]) + ") m ";
+      if (std::abs(x[0]) > 0.5 * _spec.size[0] || std::abs(x[1]) > 0.5 * _spec.size[1])
+        throw std::runtime_error(at + "lies outside the slab's plan (target.size_m)");
+      if (_overlap.distance({x[0], x[1], -0.5 * _spec.thickness}) < 0.0)
+        throw std::runtime_error(at + "lies in the DE core (" + _overlap.what() + "): no shell there");
+    }
+  }
+
+  /// The shell node nearest to each deflection point.
+  void locate_points()
+  {
+    const auto x = _fe->node_coordinates();
+    for (const auto& p : _s.shells.deflection_points)
+    {
+      std::size_t best = 0;
+      double d_best = std::numeric_limits<double>::infinity();
+      for (std::size_t k = 0; k < _fe->num_nodes(); ++k)
+      {
+        const double d = std::hypot(x[3 * k] - p[0], x[3 * k + 1] - p[1]);
+        if (d < d_best)
+        {
+          d_best = d;
+          best = k;
+        }
+      }
+      _point_nodes.push_back(best);
+    }
+  }
+
   /// How many of bar_lines(_s) are the mats' (they come first).
   std::size_t mat_lines() const
   {
@@ -279,6 +329,7 @@ private:
   std::unique_ptr<shell::FEModel> _fe;
   std::unique_ptr<bridge::CoupledSolver> _cs;
   std::vector<std::int32_t> _supports;
+  std::vector<std::size_t> _point_nodes; // the shell nodes of shells.deflection_points_m
   std::unique_ptr<shell::XdmfWriter> _writer;
   double _setup_s = 0.0, _worst = 0.0;
 };

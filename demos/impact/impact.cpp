@@ -98,8 +98,12 @@ void ImpactRun::open_output()
           "path_velocity_m_s,contact_force_n,contacts,links_broken,spheres_removed,projectile_kinetic_j,"
           "target_kinetic_j,elastic_j,dissipated_j,removed_j,imbalance_j";
   if (_coupling)
+  {
     _csv << ",shell_kinetic_j,shell_strain_j,multiplier_work_j,constraint_residual_m_s,shell_max_deflection_m,"
             "support_reaction_n";
+    for (std::size_t q = 0; q < _s.shells.deflection_points.size(); ++q)
+      _csv << ",deflection_" << q << "_m";
+  }
   _csv << '\n';
   write_row();
 }
@@ -178,6 +182,8 @@ void ImpactRun::write_row()
     const auto f = _coupling->energy();
     _csv << ',' << f.kinetic << ',' << f.strain << ',' << f.multiplier_work << ',' << _residual << ','
          << _coupling->max_deflection() << ',' << _coupling->support_reaction();
+    for (double w : _coupling->point_deflections())
+      _csv << ',' << w;
   }
   _csv << '\n' << std::flush; // whole rows, as far as the frames, if the run is killed
 }
@@ -346,6 +352,8 @@ void ImpactRun::measure_damage()
       ++lost[_links.a[k]];
       ++lost[_links.b[k]];
     }
+  if (_coupling)
+    report_band_damage(lost);
   double ejected = _solver->removed().mass;
   for (std::size_t i = 0; i < _p.size(); ++i)
   {
@@ -373,6 +381,20 @@ void ImpactRun::measure_damage()
   _out["ejected_mass_kg"] = ejected;
   _out["spheres_removed"] = _solver->removed().count;
   _out["removed_mass_kg"] = _solver->removed().mass;
+}
+
+void ImpactRun::report_band_damage(const std::vector<int>& lost)
+{
+  // the overlap's spheres are those the coupler weighted (weight > 0)
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < _p.size(); ++i)
+    if (_p.weight[i] > 0.0 && _initial_links[i] > 0)
+    {
+      sum += static_cast<double>(lost[i]) / _initial_links[i];
+      ++n;
+    }
+  _out["coupling"]["band_damage"] = n > 0 ? sum / static_cast<double>(n) : 0.0;
 }
 
 void ImpactRun::report_energy()

@@ -125,6 +125,9 @@ private:
   void report_bars();
   void measure_damage();
   void report_energy();
+  /// The mean damage (broken / initial links) of the overlap's spheres, in
+  /// the summary: how far the damage reached into the band.
+  void report_band_damage(const std::vector<int>& lost);
   const ImpactConfig& _cfg;
   const Scenario& _s;
   nlohmann::json _out;

@@ -190,27 +190,50 @@ public:
           fail(key, expect + show(ln));
         std::vector<std::array<double, 3>> line;
         for (const toml::node& pt : *pts)
-        {
-          const toml::array* c = pt.as_array();
-          if (!c || c->size() != 3)
-            fail(key, expect + show(pt));
-          std::array<double, 3> x{};
-          for (std::size_t k = 0; k < 3; ++k)
-          {
-            if (!c->get(k)->is_number())
-              fail(key, expect + show(pt));
-            x[k] = c->get(k)->value<double>().value();
-            if (!std::isfinite(x[k]))
-              fail(key, expect + show(pt));
-          }
-          line.push_back(x);
-        }
+          line.push_back(point<3>(key, pt, expect));
         lines.push_back(line);
         rec.push_back(line);
       }
     }
     record(key, rec);
     return lines;
+  }
+
+  /// An array of points [x, y] [m] (empty by default).
+  std::vector<std::array<double, 2>> points(const std::string& key, const std::string& meaning)
+  {
+    const toml::node* n = get(key, meaning, "[]", "an array of points [x, y]");
+    std::vector<std::array<double, 2>> pts;
+    if (n)
+    {
+      const std::string expect = "must be an array of points [x, y] in m, not ";
+      const toml::array* a = n->as_array();
+      if (!a)
+        fail(key, expect + show(*n));
+      for (const toml::node& pt : *a)
+        pts.push_back(point<2>(key, pt, expect));
+    }
+    record(key, pts);
+    return pts;
+  }
+
+  /// One point [x, y(, z)] of finite numbers, or an error saying `expect`.
+  template <std::size_t N>
+  std::array<double, N> point(const std::string& key, const toml::node& pt, const std::string& expect) const
+  {
+    const toml::array* c = pt.as_array();
+    if (!c || c->size() != N)
+      fail(key, expect + show(pt));
+    std::array<double, N> x{};
+    for (std::size_t k = 0; k < N; ++k)
+    {
+      if (!c->get(k)->is_number())
+        fail(key, expect + show(pt));
+      x[k] = c->get(k)->value<double>().value();
+      if (!std::isfinite(x[k]))
+        fail(key, expect + show(pt));
+    }
+    return x;
   }
 
   /// @throws std::runtime_error naming the file and the section's key.
@@ -545,6 +568,8 @@ ShellSpec read_shells(Reader& r)
                    "supported, none: free)");
   s.weight_floor = r.number("weight_floor", s.weight_floor, Allowed::open(0.0, 1.0),
                             "floor of the weighted masses in the overlap [-]");
+  s.deflection_points = r.points("deflection_points_m", "points (x, y) of the shells whose deflection "
+                                                         "history.csv follows (the nearest shell node) [m]");
   return s;
 }
 

@@ -118,6 +118,8 @@ struct ShellSpec
   std::string cell = "quadrilateral"; ///< quadrilateral | triangle
   std::string edges;               ///< free | simply-supported | clamped; "" = from target.supports
   double weight_floor = 1e-3;      ///< of the weighted masses (bridge::CouplingOptions) [-]
+  /// points (x, y) whose deflection history.csv follows: the nearest shell node's [m]
+  std::vector<std::array<double, 2>> deflection_points;
   bool coupled() const { return model == "coupled"; }
 };
 
