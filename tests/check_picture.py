@@ -9,8 +9,8 @@ the same way), this checks that
   for bit on any machine and thread count, so a difference means the
   picture is stale (re-render it: sh scripts/impact_picture.sh);
 - the caption under the picture in README.md states the same spheres,
-  striking and residual velocity ("N bonded spheres at V m/s ... leaves it
-  at R m/s").
+  striking and residual velocity ("N bonded spheres", "strikes ... at V
+  m/s", "leaves it at R m/s").
 
 Usage: check_picture.py SOURCE_DIR RUN_FIGURES
 Prints one line per problem and exits 1 if there is any.
@@ -33,7 +33,7 @@ def stated(text: str):
         m = re.search(pattern, text)
         return None if m is None else int(m.group(1).replace(",", ""))
     return {"particles": number(r"([\d,]+) bonded spheres"),
-            "striking_velocity_m_s": number(r"spheres at (\d+) m/s"),
+            "striking_velocity_m_s": number(r"strikes .*? at (\d+) m/s"),
             "residual_velocity_m_s": number(r"leaves it at (\d+) m/s")}
 
 
