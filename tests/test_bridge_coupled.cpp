@@ -601,6 +601,46 @@ TEST_CASE("coupled bar: energy kept over 20 periods", "[bridge][coupled]")
 
 namespace
 {
+/// The wave tests' strips: shells of the default concrete's E and nu (as
+/// measured on its calibration sample), h thick ...
+shell::Material strip_shell(double h)
+{
+  shell::Material sm;
+  sm.thickness = h;
+  const auto mf = dem::read_material(DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json");
+  sm.youngs_modulus = mf.macroscopic.value("youngs_modulus_pa", 30e9);
+  sm.poisson_ratio = mf.macroscopic.value("poisson_ratio", 0.2);
+  return sm;
+}
+
+/// ... and its spheres: of mean radius strip_radius, packed in the box
+/// [lo, hi], elastic links.
+constexpr double strip_radius = 3e-3;
+
+struct StripSpheres
+{
+  dem::Particles p;
+  dem::Links l;
+  dem::Material mat;
+};
+
+StripSpheres strip_spheres(const dem::Point& lo, const dem::Point& hi)
+{
+  dem::PackingOptions po;
+  po.mean_radius = strip_radius;
+  const auto region = dem::box_region(lo, hi);
+  const auto pk = dem::generate_packing(region, po);
+  double solid = 0.0;
+  for (double r : pk.r)
+    solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  StripSpheres b;
+  b.mat = dem::read_material(DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json").material;
+  b.mat.tensile = b.mat.cohesion = 1e12;
+  b.p = dem::make_particles(pk.x, pk.r, b.mat.density, solid / region.volume);
+  b.l = dem::create_links(b.p, dem::lambda_for_mean_links(b.p.x, b.p.r, 12.0), b.mat);
+  return b;
+}
+
 /// Runs the pulse test: from the shell into the DE (fe_to_de) or back;
 /// returns {reflected fraction, fraction that arrived on the far side}.
 std::pair<double, double> pulse(bool fe_to_de)
@@ -613,24 +653,13 @@ std::pair<double, double> pulse(bool fe_to_de)
   // measured 2.5 %). A 4 cm overlap (7 diameters) reflects 9.7 %: the
   // overlap must span many DE diameters.
   const double w = 0.05, h = 0.05, L = 0.5, xfe = 0.3, xde = 0.22;
-  shell::Material sm;
-  sm.thickness = h;
-  const auto mf = dem::read_material(DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json");
-  sm.youngs_modulus = mf.macroscopic.value("youngs_modulus_pa", 30e9);
-  sm.poisson_ratio = mf.macroscopic.value("poisson_ratio", 0.2);
+  const shell::Material sm = strip_shell(h);
   auto mesh = shell::create_shell_rectangle(MPI_COMM_WORLD, xfe, w, 60, 5, shell::Cell::quadrilateral);
   shell::FEModel fe(mesh, sm);
-  dem::PackingOptions po;
-  po.mean_radius = 3e-3;
-  const auto region = dem::box_region({xde, 0, -0.5 * h}, {L, w, 0.5 * h});
-  const auto pk = dem::generate_packing(region, po);
-  double solid = 0.0;
-  for (double r : pk.r)
-    solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-  dem::Material mat = mf.material;
-  mat.tensile = mat.cohesion = 1e12;
-  auto p = dem::make_particles(pk.x, pk.r, mat.density, solid / region.volume);
-  auto l = dem::create_links(p, dem::lambda_for_mean_links(p.x, p.r, 12.0), mat);
+  auto spheres = strip_spheres({xde, 0, -0.5 * h}, {L, w, 0.5 * h});
+  auto& p = spheres.p;
+  auto& l = spheres.l;
+  const auto& mat = spheres.mat;
   bridge::CouplingOptions o;
   o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, xfe, xde};
   bridge::CoupledSolver s(fe, p, l, mat, o);
@@ -663,7 +692,7 @@ std::pair<double, double> pulse(bool fe_to_de)
     // would strain the disordered packing non-affinely: vibrations that are
     // no wave.
     const double T = lp / c, V = A * std::numbers::pi / lp * c;
-    s.de().add_motion({"end", dem::DemSolver::select(p, [&](const auto& q) { return q[0] > L - 2 * po.mean_radius; }, "end"),
+    s.de().add_motion({"end", dem::DemSolver::select(p, [&](const auto& q) { return q[0] > L - 2 * strip_radius; }, "end"),
                        dem::MotionKind::velocity, {true, false, false},
                        [=](double t) { return t < T ? -V * 0.5 * (1.0 - std::cos(2.0 * std::numbers::pi * t / T)) : 0.0; }});
   }
@@ -760,11 +789,7 @@ struct StripState
 StripState bending_strip(bool coupled, double duration, int steps = 0, double dt = 0.0)
 {
   const double w = 0.05, h = 0.05, L = 0.5, xfe = 0.3, xde = 0.22, A = 1e-6, lp = 0.12, x0 = 0.1;
-  shell::Material sm;
-  sm.thickness = h;
-  const auto mf = dem::read_material(DEMBRIDGE_SOURCE_DIR "/demos/calibrate/materials/default.json");
-  sm.youngs_modulus = mf.macroscopic.value("youngs_modulus_pa", 30e9);
-  sm.poisson_ratio = mf.macroscopic.value("poisson_ratio", 0.2);
+  const shell::Material sm = strip_shell(h);
   const double length = coupled ? xfe : L;
   shell::FEModel fe(shell::create_shell_rectangle(MPI_COMM_WORLD, length, w, static_cast<int>(std::round(length / 0.005)),
                                                   10, shell::Cell::quadrilateral),
@@ -807,17 +832,10 @@ StripState bending_strip(bool coupled, double duration, int steps = 0, double dt
     read(s.v(), fe.lumped_mass());
     return out;
   }
-  dem::PackingOptions po;
-  po.mean_radius = 3e-3;
-  const auto region = dem::box_region({xde, 0, -0.5 * h}, {L, w, 0.5 * h});
-  const auto pk = dem::generate_packing(region, po);
-  double solid = 0.0;
-  for (double r : pk.r)
-    solid += 4.0 / 3.0 * std::numbers::pi * r * r * r;
-  dem::Material mat = mf.material;
-  mat.tensile = mat.cohesion = 1e12;
-  auto p = dem::make_particles(pk.x, pk.r, mat.density, solid / region.volume);
-  auto l = dem::create_links(p, dem::lambda_for_mean_links(p.x, p.r, 12.0), mat);
+  auto spheres = strip_spheres({xde, 0, -0.5 * h}, {L, w, 0.5 * h});
+  auto& p = spheres.p;
+  auto& l = spheres.l;
+  const auto& mat = spheres.mat;
   bridge::CouplingOptions o;
   o.overlap = bridge::PlanarOverlap{{1.0, 0.0, 0.0}, xfe, xde};
   bridge::CoupledSolver s(fe, p, l, mat, o);

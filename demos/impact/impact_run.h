@@ -109,6 +109,8 @@ private:
   /// The energy budget's imbalance [J]: the spheres' with the shells' (each
   /// carries the multipliers' work, their sum closes).
   double imbalance() const;
+  /// The coupled slab's shells' budget (zero without shells).
+  ShellsEnergy shells_energy() const;
   void print_header() const;
   void progress() const;
 

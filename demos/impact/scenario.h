@@ -151,6 +151,8 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
 ///   mats that do not fit in the thickness, a spacing not above the
 ///   diameter, a polyline with no part inside the slab.
 std::vector<dem::BarLine> bar_lines(const Scenario& s);
+/// The mats' bars alone (the first of bar_lines), with their checks.
+std::vector<dem::BarLine> mat_lines(const Scenario& s);
 
 /// The projectile's shape (its nose, diameter, length).
 /// @throws std::runtime_error naming the keys: a shape that cannot be made

@@ -57,14 +57,12 @@ std::function<double(const dem::Point&)> fine_scale(const Scenario& s)
   };
 }
 
-std::vector<dem::BarLine> bar_lines(const Scenario& s)
+std::vector<dem::BarLine> mat_lines(const Scenario& s)
 {
   const ReinforcementSpec& b = s.reinforcement;
   const TargetSpec& t = s.target;
   const std::string at = "scenario " + s.file.string() + ": reinforcement.";
   std::vector<dem::BarLine> lines;
-  if (!b.any())
-    return lines;
   const double d = b.bar_diameter, cover = b.cover > 0.0 ? b.cover : 2.0 * d;
   if (b.layers > 0)
   {
@@ -110,10 +108,21 @@ std::vector<dem::BarLine> bar_lines(const Scenario& s)
       }
     }
   }
+  return lines;
+}
+
+std::vector<dem::BarLine> bar_lines(const Scenario& s)
+{
+  const ReinforcementSpec& b = s.reinforcement;
+  const TargetSpec& t = s.target;
+  const std::string at = "scenario " + s.file.string() + ": reinforcement.";
+  if (!b.any())
+    return {};
+  std::vector<dem::BarLine> lines = mat_lines(s);
   for (std::size_t q = 0; q < b.polylines.size(); ++q)
   {
     dem::BarLine line;
-    line.diameter = d;
+    line.diameter = b.bar_diameter;
     line.points = b.polylines[q];
     // some part inside the slab (bars may leave it through its faces)
     bool inside = false;

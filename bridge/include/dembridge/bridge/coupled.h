@@ -149,6 +149,8 @@ public:
   std::span<const double> multipliers() const { return _mult->multipliers(); }
   const CouplingOperator& coupling() const { return _op; }
   CoupledEnergy energy() const;
+  /// The multipliers' work on the FE side so far [J] (CoupledEnergy::multiplier_work_fe).
+  double multiplier_work() const { return _multiplier_energy; }
   const CoupledTimings& timings() const { return _time; }
 
   /// Writes the coupled state after a step: both sides (groups "shell" and
