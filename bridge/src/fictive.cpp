@@ -117,7 +117,18 @@ bool invert(const Element& e, const V3& p, V3& ref)
       break;
   }
   ref = {s, t, z};
-  return std::isfinite(s) && std::isfinite(t) && std::isfinite(z);
+  if (!(std::isfinite(s) && std::isfinite(t) && std::isfinite(z)))
+    return false;
+  // converged only if the point is where the map puts ref: for a point
+  // outside a quadrilateral, Newton on the bilinear map may wander and stop
+  // anywhere, also inside the reference square, which would place the
+  // point in an element far from it
+  double size = 0.0;
+  for (int k = 1; k < e.npc; ++k)
+    for (const auto* x : {e.xm[k], e.xp[k]})
+      size = std::max(size, std::hypot(x[0] - e.xm[0][0], x[1] - e.xm[0][1], x[2] - e.xm[0][2]));
+  const V3 y = map(e, s, t, z);
+  return std::hypot(y[0] - p[0], y[1] - p[1], y[2] - p[2]) <= 1e-9 * size;
 }
 
 /// Smallest margin of the reference coordinates (>= 0 inside).

@@ -74,6 +74,7 @@ public:
   {
     warn_path();
     check_points();
+    check_pulse();
   }
 
   const dem::Region& de_region() const override { return _region; }
@@ -138,7 +139,7 @@ public:
     {
       throw std::runtime_error(std::string("the coupled slab (shells.*, run.dt_s, run.safety_factor): ") + e.what());
     }
-    locate_points();
+    _points = std::make_unique<ShellPoints>(*_fe, _s);
     _supports = bridge::slab_support_dofs(*_fe, _spec);
     if (!_supports.empty())
       _cs->fe().add_motion({"supports", _supports, shell::MotionKind::fixed, {}});
@@ -190,14 +191,7 @@ public:
     return f;
   }
 
-  std::vector<double> point_deflections() const override
-  {
-    const auto u = _cs->fe().u();
-    std::vector<double> w;
-    for (auto k : _point_nodes)
-      w.push_back(u[_fe->block_size() * k + 2]);
-    return w;
-  }
+  std::vector<double> point_deflections() const override { return _points->deflections(_cs->fe().u()); }
 
   void open_output(const std::filesystem::path& dir, const checkpoint::Group* root) override
   {
@@ -278,25 +272,18 @@ private:
     }
   }
 
-  /// The shell node nearest to each deflection point.
-  void locate_points()
+  /// A pulse's disc must lie in the core (the shells and the band's
+  /// spheres carry no load of their own).
+  void check_pulse() const
   {
-    const auto x = _fe->node_coordinates();
-    for (const auto& p : _s.shells.deflection_points)
-    {
-      std::size_t best = 0;
-      double d_best = std::numeric_limits<double>::infinity();
-      for (std::size_t k = 0; k < _fe->num_nodes(); ++k)
-      {
-        const double d = std::hypot(x[3 * k] - p[0], x[3 * k + 1] - p[1]);
-        if (d < d_best)
-        {
-          d_best = d;
-          best = k;
-        }
-      }
-      _point_nodes.push_back(best);
-    }
+    if (!_s.pulse.any())
+      return;
+    const double r = _s.pulse.radius > 0.0 ? _s.pulse.radius : 0.5 * _s.projectile.diameter;
+    const double reach = _spec.core == bridge::SlabSpec::Core::box ? std::min(_spec.core_half[0], _spec.core_half[1])
+                                                                   : _spec.core_radius;
+    if (r > reach)
+      throw std::runtime_error("pulse.radius_m = " + number_text(r) + " m: the loaded disc reaches beyond the DE core ("
+                               + _overlap.what() + "): load the core only (a smaller disc, or a larger core)");
   }
 
   /// The projectile's path should stay in the core through the thickness
@@ -321,14 +308,14 @@ private:
   std::unique_ptr<shell::FEModel> _fe;
   std::unique_ptr<bridge::CoupledSolver> _cs;
   std::vector<std::int32_t> _supports;
-  std::vector<std::size_t> _point_nodes; // the shell nodes of shells.deflection_points_m
+  std::unique_ptr<ShellPoints> _points; // shells.deflection_points_m
   std::unique_ptr<shell::XdmfWriter> _writer;
   double _setup_s = 0.0, _worst = 0.0;
 };
 
 } // namespace
 
-bridge::SlabSpec slab_spec(const Scenario& s)
+bridge::SlabSpec slab_plan(const Scenario& s)
 {
   const ShellSpec& sh = s.shells;
   const TargetSpec& t = s.target;
@@ -336,6 +323,24 @@ bridge::SlabSpec slab_spec(const Scenario& s)
   sp.size = t.size;
   sp.thickness = t.thickness;
   sp.centre = s.projectile.aim;
+  sp.band = sh.band > 0.0 ? sh.band : 8.0 * t.mean_radius;
+  sp.element_size = sh.element_size > 0.0 ? sh.element_size : 0.5 * sp.band;
+  sp.outer_element_size = sh.outer_element_size;
+  sp.cell = sh.cell == "triangle" ? shell::Cell::triangle : shell::Cell::quadrilateral;
+  const std::string edges = !sh.edges.empty()             ? sh.edges
+                            : t.supports == "sides"       ? "clamped"
+                            : t.supports == "rear-edges" ? "simply-supported"
+                                                          : "free";
+  sp.edges = edges == "clamped"            ? bridge::SlabSpec::Edges::clamped
+             : edges == "simply-supported" ? bridge::SlabSpec::Edges::simply_supported
+                                           : bridge::SlabSpec::Edges::free;
+  return sp;
+}
+
+bridge::SlabSpec slab_spec(const Scenario& s)
+{
+  const ShellSpec& sh = s.shells;
+  bridge::SlabSpec sp = slab_plan(s);
   if (sh.core == "box")
   {
     sp.core = bridge::SlabSpec::Core::box;
@@ -358,17 +363,6 @@ bridge::SlabSpec slab_spec(const Scenario& s)
   if (s.run.safety > 0.95)
     throw std::runtime_error("run.safety_factor = " + number_text(s.run.safety) + ": with shells.model = "
                              "\"coupled\" allowed (0, 0.95] (the coupled critical step is an estimate from below)");
-  sp.band = sh.band > 0.0 ? sh.band : 8.0 * t.mean_radius;
-  sp.element_size = sh.element_size > 0.0 ? sh.element_size : 0.5 * sp.band;
-  sp.outer_element_size = sh.outer_element_size;
-  sp.cell = sh.cell == "triangle" ? shell::Cell::triangle : shell::Cell::quadrilateral;
-  const std::string edges = !sh.edges.empty()             ? sh.edges
-                            : t.supports == "sides"       ? "clamped"
-                            : t.supports == "rear-edges" ? "simply-supported"
-                                                          : "free";
-  sp.edges = edges == "clamped"            ? bridge::SlabSpec::Edges::clamped
-             : edges == "simply-supported" ? bridge::SlabSpec::Edges::simply_supported
-                                           : bridge::SlabSpec::Edges::free;
   try
   {
     sp.validate();
@@ -412,5 +406,34 @@ shell::Reinforcement shell_steel(const Scenario& s, double normal_z)
 }
 
 std::unique_ptr<SlabCoupling> make_slab_coupling(const Scenario& s) { return std::make_unique<CoupledSlab>(s); }
+
+ShellPoints::ShellPoints(const shell::FEModel& fe, const Scenario& s)
+  : _n(s.shells.deflection_points.size()), _dofs(fe.num_dofs())
+{
+  if (_n == 0)
+    return;
+  const double h = s.target.thickness;
+  std::vector<double> pts;
+  for (const auto& p : s.shells.deflection_points)
+  {
+    if (std::abs(p[0]) > 0.5 * s.target.size[0] || std::abs(p[1]) > 0.5 * s.target.size[1])
+      throw std::runtime_error("shells.deflection_points_m: point (" + number_text(p[0]) + ", " + number_text(p[1])
+                               + ") m lies outside the slab's plan (target.size_m)");
+    pts.insert(pts.end(), {p[0], p[1], -0.5 * h});
+  }
+  const bridge::ShellGeometry g{fe.node_coordinates(), fe.nodal_normals(), fe.cell_nodes(), fe.nodes_per_cell(), h};
+  _op = std::make_unique<bridge::CouplingOperator>(bridge::locate(g, pts));
+}
+
+std::vector<double> ShellPoints::deflections(std::span<const double> u) const
+{
+  std::vector<double> v(3 * _n), w(_n);
+  if (_n == 0)
+    return w;
+  _op->interpolate(u, v);
+  for (std::size_t q = 0; q < _n; ++q)
+    w[q] = v[3 * q + 2];
+  return w;
+}
 
 } // namespace dembridge::demo

@@ -71,7 +71,8 @@ void ImpactRun::open_writer(const checkpoint::Group* root)
   const auto file = dir() / "particles.xdmf";
   _writer = root ? std::make_unique<ParticleWriter>(file, _links, _p.size(), true, root->group("particles_xdmf"))
                  : std::make_unique<ParticleWriter>(file, _links, _p.size(), true);
-  _writer->add_surface("projectile", body_surface(_shape));
+  if (!pulsed())
+    _writer->add_surface("projectile", body_surface(_shape));
   if (bars())
   {
     const auto bars = dir() / "bars.xdmf";
@@ -94,16 +95,18 @@ void ImpactRun::open_output()
   open_writer(nullptr);
   write_frame();
   _csv.open(dir() / "history.csv");
-  _csv << "time_s,tip_x_m,tip_y_m,tip_z_m,depth_m,velocity_x_m_s,velocity_y_m_s,velocity_z_m_s,speed_m_s,"
+  if (pulsed())
+    _csv << "time_s,load_n,load_work_j,links_broken,spheres_removed,target_kinetic_j,elastic_j,dissipated_j,"
+            "removed_j,imbalance_j";
+  else
+    _csv << "time_s,tip_x_m,tip_y_m,tip_z_m,depth_m,velocity_x_m_s,velocity_y_m_s,velocity_z_m_s,speed_m_s,"
           "path_velocity_m_s,contact_force_n,contacts,links_broken,spheres_removed,projectile_kinetic_j,"
           "target_kinetic_j,elastic_j,dissipated_j,removed_j,imbalance_j";
   if (_coupling)
-  {
     _csv << ",shell_kinetic_j,shell_strain_j,multiplier_work_j,constraint_residual_m_s,shell_max_deflection_m,"
             "support_reaction_n";
-    for (std::size_t q = 0; q < _s.shells.deflection_points.size(); ++q)
-      _csv << ",deflection_" << q << "_m";
-  }
+  for (std::size_t q = 0; q < _s.shells.deflection_points.size(); ++q)
+    _csv << ",deflection_" << q << "_m";
   _csv << '\n';
   write_row();
 }
@@ -124,6 +127,8 @@ void ImpactRun::resume()
   _max_depth = tracked[0];
   _touched = tracked[1] != 0.0;
   _peak_force = tracked[2];
+  if (_track)
+    _track->load(run.group("deflections"));
   _out["restarted_from_step"] = _solver->steps();
   if (_cfg.output_dir.empty())
     return;
@@ -139,6 +144,8 @@ void ImpactRun::save(const checkpoint::Group& root)
     _solver->save(root.group("dem"));
   const auto run = root.group("run");
   run.write("tracked", std::vector<double>{_max_depth, _touched ? 1.0 : 0.0, _peak_force});
+  if (_track)
+    _track->save(run.group("deflections"));
   if (_writer)
     _writer->save(root.group("particles_xdmf"));
   if (_bar_writer)
@@ -149,8 +156,8 @@ void ImpactRun::save(const checkpoint::Group& root)
 
 void ImpactRun::write_frame()
 {
-  const RigidBody& b = _solver->body(0);
-  _writer->write(_solver->time(), _p, _links, std::span<const RigidBody>(&b, 1));
+  const auto bodies = pulsed() ? std::span<const RigidBody>() : std::span<const RigidBody>(&_solver->body(0), 1);
+  _writer->write(_solver->time(), _p, _links, bodies);
   if (_bar_writer)
     _bar_writer->write(_solver->time(), _solver->bars());
   if (_coupling)
@@ -166,6 +173,8 @@ void ImpactRun::write_row()
 {
   if (!_csv.is_open())
     return;
+  if (pulsed())
+    return write_pulse_row();
   const RigidBody& b = _solver->body(0);
   const auto e = _solver->energy();
   const ShellsEnergy f = shells_energy();
@@ -178,13 +187,29 @@ void ImpactRun::write_row()
        << e.softening + e.compaction + e.breakage + e.friction + e.body_friction + e.damping + e.bar_plastic
               + e.bar_opening + e.bar_slip + e.bar_broken
        << ',' << e.removed << ',' << e.imbalance() + f.imbalance;
+  end_row(f);
+}
+
+void ImpactRun::write_pulse_row()
+{
+  const auto e = _solver->energy();
+  const ShellsEnergy f = shells_energy();
+  _csv << std::setprecision(10) << _solver->time() << ',' << _s.pulse.force(_solver->time()) << ','
+       << e.external_work << ',' << broken() << ',' << _solver->removed().count << ','
+       << e.kinetic + e.bar_kinetic << ',' << e.elastic + e.bar_elastic << ','
+       << e.softening + e.compaction + e.breakage + e.friction + e.damping + e.bar_plastic + e.bar_opening
+              + e.bar_slip + e.bar_broken
+       << ',' << e.removed << ',' << e.imbalance() + f.imbalance;
+  end_row(f);
+}
+
+void ImpactRun::end_row(const ShellsEnergy& f)
+{
   if (_coupling)
-  {
     _csv << ',' << f.kinetic << ',' << f.strain << ',' << f.multiplier_work << ',' << _residual << ','
          << _coupling->max_deflection() << ',' << _coupling->support_reaction();
-    for (double w : _coupling->point_deflections())
-      _csv << ',' << w;
-  }
+  for (double w : point_deflections())
+    _csv << ',' << w;
   _csv << '\n' << std::flush; // whole rows, as far as the frames, if the run is killed
 }
 
@@ -207,6 +232,14 @@ void ImpactRun::print_header() const
               << " m" << (_s.reinforcement.embedded ? " (embedded)" : "") << ", " << _out["reinforcement"]["elements"]
               << " elements, " << _bonds << " bonds; f_y " << _s.reinforcement.steel.yield
               << " Pa, bond tau_max " << _s.reinforcement.bond.tau_max << " Pa\n";
+  if (pulsed())
+  {
+    std::cout << "# pulse: " << fmt(_s.pulse.peak_force) << " N half sine over " << fmt(_s.pulse.duration) << " s on "
+              << _loaded.size() << " spheres; dt " << fmt(_dt) << " s (critical " << fmt(_dt_crit) << "), "
+              << _nsteps << " steps (" << fmt(_duration) << " s)\n"
+              << "      time [s]   load [N]  max |w| [m]  broken  imbalance/work\n";
+    return;
+  }
   std::cout << "# projectile " << fmt(_body.mass) << " kg at " << _s.projectile.velocity
             << " m/s (" << fmt(_ke0) << " J); dt " << fmt(_dt) << " s (critical " << fmt(_dt_crit) << "), up to "
             << _nsteps << " steps (" << fmt(_duration) << " s)\n"
@@ -215,6 +248,19 @@ void ImpactRun::print_header() const
 
 void ImpactRun::progress() const
 {
+  if (pulsed())
+  {
+    double w = 0.0;
+    for (double x : point_deflections())
+      w = std::max(w, std::abs(x));
+    if (_coupling)
+      w = std::max(w, _coupling->max_deflection());
+    const double work = std::max(std::abs(_solver->energy().external_work), 1e-300);
+    std::cout << std::setw(14) << fmt(_solver->time()) << std::setw(11) << fmt(_s.pulse.force(_solver->time()), 3)
+              << std::setw(13) << fmt(w, 3) << std::setw(8) << broken() << std::setw(16)
+              << fmt(imbalance() / work, 3) << std::endl;
+    return;
+  }
   std::cout << std::setw(14) << fmt(_solver->time()) << std::setw(13) << fmt(path_velocity()) << std::setw(11)
             << fmt(-tip()[2]) << std::setw(11) << fmt(contact_force(), 3) << std::setw(8) << broken()
             << std::setw(9) << _solver->removed().count << std::setw(15) << fmt(imbalance() / _ke0, 3)
@@ -223,6 +269,8 @@ void ImpactRun::progress() const
 
 Outcome ImpactRun::outcome()
 {
+  if (pulsed())
+    return Outcome::running; // to the run's duration
   const double depth = -tip()[2];
   _max_depth = std::max(_max_depth, depth);
   const bool touching = !_solver->body_contacts(0).ids.empty();
@@ -258,6 +306,8 @@ void ImpactRun::loop()
       _coupling->observe(); // the last step's state is read
     return _outcome != Outcome::running;
   };
+  if (_track)
+    h.after_step = [this](std::int64_t) { _track->add(_solver->time(), point_deflections()); };
   h.row = [this](std::int64_t, bool) { write_row(); };
   if (_writer)
     h.frame = [this](std::int64_t, bool) { write_frame(); };
@@ -276,8 +326,42 @@ void ImpactRun::loop()
   }
 }
 
+void ImpactRun::report_pulse()
+{
+  _out["outcome"] = outcome_name(_outcome);
+  _out["perforated"] = false;
+  const auto e = _solver->energy();
+  const ShellsEnergy f = shells_energy();
+  const double unbooked = e.imbalance() + f.imbalance;
+  _out["energy"] = {{"load_work_j", e.external_work},     {"target_kinetic_j", e.kinetic},
+                    {"elastic_j", e.elastic},               {"dissipated_j", e.softening + e.compaction + e.breakage + e.friction + e.damping},
+                    {"support_work_j", e.prescribed_work}, {"imbalance_j", unbooked},
+                    {"imbalance_share", e.external_work != 0.0 ? unbooked / std::abs(e.external_work) : 0.0}};
+  if (_coupling)
+  {
+    auto& j = _out["energy"];
+    j["shell_kinetic_j"] = f.kinetic;
+    j["shell_strain_j"] = f.strain;
+    j["multiplier_work_j"] = f.multiplier_work;
+  }
+}
+
 void ImpactRun::report()
 {
+  if (pulsed())
+    report_pulse();
+  if (_track)
+    _out["deflection_points"] = _track->report();
+  if (pulsed())
+  {
+    _out["links_broken"] = broken();
+    _out["steps"] = _solver->steps();
+    _out["time_s"] = _solver->time();
+    if (_coupling)
+      _out["coupling"].update(_coupling->report());
+    _out["peak_memory_mb"] = peak_memory_mb();
+    return;
+  }
   const RigidBody& b = _solver->body(0);
   // perforated: it touched the slab and its tail passed the rear face
   const bool perforated = _outcome == Outcome::perforated
@@ -384,11 +468,12 @@ void ImpactRun::measure_damage()
 
 void ImpactRun::report_band_damage(const std::vector<int>& lost)
 {
-  // the overlap's spheres are those the coupler weighted (weight > 0)
+  // the overlap's spheres: those whose energy weight 1 - eta is below 1
+  // (1 in the DE-only core)
   double sum = 0.0;
   std::size_t n = 0;
   for (std::size_t i = 0; i < _p.size(); ++i)
-    if (_p.weight[i] > 0.0 && _initial_links[i] > 0)
+    if (_p.weight[i] < 1.0 && _initial_links[i] > 0)
     {
       sum += static_cast<double>(lost[i]) / _initial_links[i];
       ++n;
@@ -438,7 +523,9 @@ void ImpactRun::report_energy()
 nlohmann::json run_impact(const ImpactConfig& cfg)
 {
   Stopwatch clock;
-  auto out = impl::ImpactRun(cfg).run();
+  if (cfg.scenario.shells.shells_only() && !cfg.shells_only)
+    throw std::runtime_error("shells.model = \"fe\": this program was built without the shells (use build/bin/impact)");
+  auto out = cfg.scenario.shells.shells_only() ? cfg.shells_only(cfg) : impl::ImpactRun(cfg).run();
   out["wall_s"] = clock.seconds();
   return out;
 }

@@ -11,6 +11,7 @@
 #include "restart.h"
 
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -29,6 +30,10 @@ struct ImpactConfig
   /// Builds the coupled slab of a scenario with shells.model = "coupled"
   /// (make_slab_coupling, coupled_slab.h); empty: such a scenario is refused.
   SlabCouplingFactory coupling;
+  /// Runs a scenario with shells.model = "fe": the slab all in shells under
+  /// the pulse (run_shell_slab, coupled_slab.h); empty: such a scenario is
+  /// refused.
+  std::function<nlohmann::json(const ImpactConfig&)> shells_only;
 };
 
 /// The craters measured on the slab (docs/impact.md, "Measurements"). A

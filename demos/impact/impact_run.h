@@ -5,6 +5,7 @@
 /// coupled slab's), its time loop, output, checkpoints and measurements in
 /// impact.cpp.
 
+#include "deflection.h"
 #include "impact.h"
 #include "restart.h"
 
@@ -52,6 +53,8 @@ public:
 
 private:
   bool bars() const { return _has_bars; }
+  /// A prescribed pulse loads the slab in place of the projectile.
+  bool pulsed() const { return _s.pulse.any(); }
 
   // ---- set-up ---------------------------------------------------------------
   void build_target();
@@ -75,6 +78,16 @@ private:
   /// it is an error: the file is not this slab's).
   Packing read_target_packing(const Region& region) const;
   void build_projectile();
+  /// The pulse (PulseSpec) on the spheres under its disc: those centred
+  /// within pulse.radius_m of projectile.aim_m in plan whose top lies
+  /// within one smallest radius of the struck face, an equal share each.
+  void set_up_pulse();
+  /// The spheres of each deflection point of an all-DE slab: those centred
+  /// within 2 mean radii of it in plan, through the thickness.
+  void locate_points();
+  /// The deflection at each point [m]: the coupled slab's shells', or the
+  /// mass-weighted mean u_z of the point's spheres.
+  std::vector<double> point_deflections() const;
   void set_up_solver();
   void set_up_supports();
 
@@ -105,6 +118,9 @@ private:
 
   std::size_t broken() const;
   void write_row();
+  void write_pulse_row();
+  /// A row's coupled columns and deflection points, its end of line.
+  void end_row(const ShellsEnergy& f);
 
   /// The energy budget's imbalance [J]: the spheres' with the shells' (each
   /// carries the multipliers' work, their sum closes).
@@ -127,6 +143,7 @@ private:
   void report_bars();
   void measure_damage();
   void report_energy();
+  void report_pulse();
   /// The mean damage (broken / initial links) of the overlap's spheres, in
   /// the summary: how far the damage reached into the band.
   void report_band_damage(const std::vector<int>& lost);
@@ -162,6 +179,9 @@ private:
   double _max_depth = -1e300, _peak_force = 0.0;
   bool _touched = false;
   Outcome _outcome = Outcome::running;
+  std::vector<std::int32_t> _loaded;                  // the pulse's spheres
+  std::vector<std::vector<std::int32_t>> _point_spheres; // an all-DE slab's deflection points
+  std::unique_ptr<DeflectionTrack> _track;
 };
 
 } // namespace dembridge::demo::impl

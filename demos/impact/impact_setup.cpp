@@ -4,9 +4,13 @@
 #include "impact_run.h"
 #include "support.h"
 
+#include "dembridge/dem/skin.h"
+
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <limits>
+#include <numbers>
 #include <stdexcept>
 
 namespace dembridge::demo::impl
@@ -42,6 +46,14 @@ void ImpactRun::build_target()
   const auto bulk = with_context(keys, [&] { return bulk_spheres(region, _p.x, _p.r); });
   _lambda = lambda_for_mean_links(_p.x, _p.r, _s.material.links_per_sphere, bulk);
   _links = create_links(_p, _lambda, mat);
+  if (t.skin_compensation)
+  {
+    // the slab's faces (not the coupled core's band, which the shells continue)
+    const double depth = 2.0 * *std::max_element(_p.r.begin(), _p.r.end());
+    const auto skin = compensate_skin(_p, _links, box_region(_lo, _hi), depth);
+    _out["skin_compensation"] = {{"spheres", skin.spheres}, {"links", skin.links}, {"bulk_links", skin.bulk_links},
+                                 {"mean_link_factor", skin.mean_link_factor}};
+  }
   if (bars())
     _bonds = create_bonds(_bars, _p, _s.reinforcement.bond_reach > 0.0 ? _s.reinforcement.bond_reach
                                                                        : 0.5 * mean(_p.r));
@@ -139,8 +151,10 @@ Packing ImpactRun::read_target_packing(const Region& region) const
 void ImpactRun::build_projectile()
 {
   const ProjectileSpec& q = _s.projectile;
-  const Shape sh = projectile_shape(q); // checked when the scenario was read
   _dir = path_direction(q);
+  if (pulsed())
+    return; // the pulse loads the slab in its place
+  const Shape sh = projectile_shape(q); // checked when the scenario was read
   const V3 aim{q.aim[0], q.aim[1], 0.0};
   const V3 tip{aim[0] - q.standoff * _dir[0], aim[1], aim[2] - q.standoff * _dir[2]};
   const double density = q.mass > 0.0 ? q.mass / sh.volume() : q.density;
@@ -188,15 +202,24 @@ void ImpactRun::set_up_solver()
   }
   const ProjectileSpec& q = _s.projectile;
   // the time to cross the slab at the striking speed sets the output's
-  // pace; the run goes on for up to 4 x that, unless decided earlier
-  _crossing = (q.standoff + _s.target.thickness / std::abs(_dir[2]) + q.length) / q.velocity;
+  // pace; the run goes on for up to 4 x that, unless decided earlier (a
+  // pulse: its run's duration, given)
+  _crossing = pulsed() ? run.duration : (q.standoff + _s.target.thickness / std::abs(_dir[2]) + q.length) / q.velocity;
   _duration = run.duration > 0.0 ? run.duration : 4.0 * _crossing;
   _nsteps = static_cast<std::int64_t>(std::ceil(_duration / _dt));
   _crossing_steps = std::max<std::int64_t>(1, static_cast<std::int64_t>(_crossing / _dt));
   const double margin = run.domain_margin > 0.0 ? run.domain_margin : _s.target.thickness;
   _solver->set_domain({_lo[0] - margin, _lo[1] - margin, _lo[2] - margin},
                       {_hi[0] + margin, _hi[1] + margin, _hi[2] + margin});
-  _solver->add_body(_body);
+  if (pulsed())
+    set_up_pulse();
+  else
+    _solver->add_body(_body);
+  if (!_coupling)
+    locate_points();
+  if (!_s.shells.deflection_points.empty())
+    _track = std::make_unique<DeflectionTrack>(_s.shells.deflection_points,
+                                               pulsed() ? _s.pulse.duration : std::numeric_limits<double>::infinity());
   if (_coupling)
     _coupling->start(); // both sides, the bars given to the coupler
   else
@@ -206,6 +229,62 @@ void ImpactRun::set_up_solver()
     _solver->start();
   }
   _history_every = run.history_every > 0 ? run.history_every : std::max<std::int64_t>(1, _crossing_steps / 250);
+}
+
+void ImpactRun::set_up_pulse()
+{
+  const PulseSpec& pu = _s.pulse;
+  const double radius = pu.radius > 0.0 ? pu.radius : 0.5 * _s.projectile.diameter;
+  const auto& aim = _s.projectile.aim;
+  for (std::size_t i = 0; i < _p.size(); ++i)
+  {
+    const double* x = &_p.x[3 * i];
+    if (std::hypot(x[0] - aim[0], x[1] - aim[1]) <= radius && x[2] + _p.r[i] >= -_rmin)
+      _loaded.push_back(static_cast<std::int32_t>(i));
+  }
+  if (_loaded.empty())
+    throw std::runtime_error("pulse.radius_m = " + fmt(radius) + " m: no sphere of the struck face is centred "
+                             "within it of projectile.aim_m; give a larger disc");
+  for (auto i : _loaded)
+    if (!_p.weight.empty() && _p.weight[i] < 1.0) // 1 - eta: 1 in the DE-only core
+      throw std::runtime_error("pulse.radius_m = " + fmt(radius) + " m: the loaded disc reaches the overlap (" +
+                               "shells.core_radius_m or core_size_m): load the DE core only");
+  const double share = 1.0 / static_cast<double>(_loaded.size());
+  _solver->add_force({"pulse", _loaded, {0.0, 0.0, -1.0}, [pu, share](double t) { return share * pu.force(t); }});
+}
+
+void ImpactRun::locate_points()
+{
+  const double reach = 2.0 * _s.target.mean_radius;
+  for (const auto& pt : _s.shells.deflection_points)
+  {
+    std::vector<std::int32_t> ids;
+    for (std::size_t i = 0; i < _p.size(); ++i)
+      if (std::hypot(_p.x[3 * i] - pt[0], _p.x[3 * i + 1] - pt[1]) <= reach)
+        ids.push_back(static_cast<std::int32_t>(i));
+    if (ids.empty())
+      throw std::runtime_error("shells.deflection_points_m: no sphere is centred within 2 mean radii (" + fmt(reach)
+                               + " m) of (" + fmt(pt[0]) + ", " + fmt(pt[1]) + ") m: a point outside the slab?");
+    _point_spheres.push_back(std::move(ids));
+  }
+}
+
+std::vector<double> ImpactRun::point_deflections() const
+{
+  if (_coupling)
+    return _coupling->point_deflections();
+  std::vector<double> w;
+  for (const auto& ids : _point_spheres)
+  {
+    double mu = 0.0, m = 0.0;
+    for (auto i : ids)
+    {
+      mu += _p.m[i] * (_p.x[3 * i + 2] - _p.x0[3 * i + 2]);
+      m += _p.m[i];
+    }
+    w.push_back(mu / m);
+  }
+  return w;
 }
 
 void ImpactRun::set_up_supports()
@@ -261,8 +340,16 @@ void ImpactRun::describe()
   _out["dt_s"] = _dt;
   _out["dt_critical_s"] = _dt_crit;
   _out["duration_s"] = _duration;
-  _out["projectile_mass_kg"] = _body.mass;
-  _out["striking_velocity_m_s"] = _s.projectile.velocity;
+  if (pulsed())
+    _out["pulse"] = {{"peak_force_n", _s.pulse.peak_force},
+                     {"duration_s", _s.pulse.duration},
+                     {"impulse_n_s", 2.0 / std::numbers::pi * _s.pulse.peak_force * _s.pulse.duration},
+                     {"loaded_spheres", _loaded.size()}};
+  else
+  {
+    _out["projectile_mass_kg"] = _body.mass;
+    _out["striking_velocity_m_s"] = _s.projectile.velocity;
+  }
   const auto fine = fine_mean_radius();
   if (fine)
     _out["fine_mean_radius_m"] = *fine;

@@ -43,11 +43,12 @@ int main(int argc, char** argv)
   int plot = 1;
   CLI::App app{"A rigid projectile striking a slab of DE concrete", "impact"};
   app.add_option("scenario", scenario,
-                 "scenario file (TOML), or the name of a shipped one: small, small-rc, small-slab, hanchak-48, semi-infinite");
+                 "scenario file (TOML), or the name of a shipped one: small, small-rc, small-slab, elastic-slab, hanchak-48, semi-infinite");
   app.add_option("--set", sets, "override a scenario key: section.key=value (TOML value), e.g. "
                                 "projectile.velocity_m_s=600; repeatable");
   demo::add_choice(app, "--model", model, "the slab's model, as the scenario key shells.model: de = all spheres, "
-                   "coupled = a DE core tied to reinforced-concrete shells; \"\" = the scenario's", "de | coupled");
+                   "coupled = a DE core tied to reinforced-concrete shells, fe = all shells under the scenario's [pulse]; \"\" = the "
+                   "scenario's", "de | coupled | fe");
   app.add_flag("--keys", keys, "print every scenario key with its unit, default and allowed values, and exit");
   demo::add_integer(app, "--plot", plot, "1: write DIR/history.png with matplotlib, 0: no", demo::Allowed::closed(0, 1));
   demo::RestartOptions restart;
@@ -84,6 +85,7 @@ int main(int argc, char** argv)
   c.restart = &restart;
   c.plot = plot == 1;
   c.coupling = demo::make_slab_coupling;
+  c.shells_only = demo::run_shell_slab;
 
   return demo::run_guarded(argc, argv, [&]
   {
@@ -100,5 +102,5 @@ int main(int argc, char** argv)
       if (demo::run_plot_script("plot_impact.py", c.output_dir, "history.csv is"))
         std::cout << "plot: " << (std::filesystem::path(c.output_dir) / "history.png").string() << "\n";
     }
-  }, summary, c.scenario.shells.coupled() ? demo::petsc_runtime() : demo::Runtime{});
+  }, summary, c.scenario.shells.model != "de" ? demo::petsc_runtime() : demo::Runtime{});
 }

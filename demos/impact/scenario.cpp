@@ -436,6 +436,10 @@ TargetSpec read_target(Reader& r)
   t.fine_transition = r.number("fine_transition_m", t.fine_transition,
                                Allowed::positive(100.0).or_value(0.0, "4 mean_radius_m"),
                                "beyond fine_radius_m, the width over which the radii grow to mean_radius_m [m]");
+  t.skin_compensation = r.boolean("skin_compensation", t.skin_compensation,
+                                  "stiffen the links of the spheres within 2 Rmax of the slab's faces by the links "
+                                  "they miss (docs/impact.md, \"Elastic checks\"): a slab a few spheres thick is "
+                                  "soft in bending without it; strengths unchanged");
   return t;
 }
 
@@ -545,9 +549,10 @@ ShellSpec read_shells(Reader& r)
   r.section("shells", "the slab's model: all DE, or a DE core round the impact coupled to reinforced-concrete "
                       "shells over the rest (docs/impact.md, \"Coupled slabs\")");
   ShellSpec s;
-  s.model = r.text("model", s.model, "de | coupled",
+  s.model = r.text("model", s.model, "de | coupled | fe",
                    "de: the whole slab of spheres; coupled: spheres in the core and its band only, shells of the "
-                   "concrete's E and nu with the mats' steel as layers elsewhere (impact --model sets it)");
+                   "concrete's E and nu with the mats' steel as layers elsewhere; fe: the whole slab of those "
+                   "shells, loaded by the [pulse] (elastic checks) (impact --model sets it)");
   s.core = r.text("core", s.core, "cylinder | box", "the DE core's shape, through the thickness, centred on "
                                                      "projectile.aim_m");
   s.core_radius = r.number("core_radius_m", s.core_radius, Allowed::positive(100.0).or_value(0.0, "none"),
@@ -568,9 +573,49 @@ ShellSpec read_shells(Reader& r)
                    "supported, none: free)");
   s.weight_floor = r.number("weight_floor", s.weight_floor, Allowed::open(0.0, 1.0),
                             "floor of the weighted masses in the overlap [-]");
-  s.deflection_points = r.points("deflection_points_m", "points (x, y) of the shells whose deflection "
-                                                         "history.csv follows (the nearest shell node) [m]");
+  s.deflection_points = r.points("deflection_points_m", "points (x, y) whose deflection history.csv follows: "
+                                                         "the nearest shell node's, or with spheres there the "
+                                                         "mean of those within 2 mean radii in plan [m]");
   return s;
+}
+
+PulseSpec read_pulse(Reader& r)
+{
+  r.section("pulse", "a prescribed load in place of the projectile, for elastic checks of the three models: a "
+                     "half-sine force along -z spread over a disc of the struck face centred on projectile.aim_m "
+                     "(docs/impact.md, \"Elastic checks\")");
+  PulseSpec p;
+  p.peak_force = r.number("peak_force_n", p.peak_force, Allowed::positive(1e12).or_value(0.0, "none: the projectile"),
+                          "the pulse's peak force [N]");
+  p.duration = r.number("duration_s", p.duration, Allowed::positive(10.0).or_value(0.0, "none"),
+                        "the half sine's duration (needed with peak_force_n) [s]");
+  p.radius = r.number("radius_m", p.radius, Allowed::positive(100.0).or_value(0.0, "projectile.diameter_m / 2"),
+                      "the loaded disc's radius [m]");
+  return p;
+}
+
+/// The pulse's own checks and what it asks of the run (a duration).
+void check_pulse(const Scenario& s)
+{
+  const PulseSpec& p = s.pulse;
+  const std::string at = "scenario " + s.file.string() + ": ";
+  if (s.shells.shells_only() && !p.any())
+    throw std::runtime_error(at + "shells.model = \"fe\" needs a pulse (pulse.peak_force_n > 0): the shells "
+                             "neither fracture nor meet a projectile");
+  if (!p.any())
+    return;
+  if (!(p.duration > 0.0))
+    throw std::runtime_error(at + "pulse.duration_s = 0: give the pulse's duration (> 0 s) with pulse.peak_force_n");
+  if (!(s.run.duration > 0.0))
+    throw std::runtime_error(at + "run.duration_s = 0 with a pulse: give the time to simulate (> 0 s; the "
+                             "automatic one follows a projectile)");
+  const double r = p.radius > 0.0 ? p.radius : 0.5 * s.projectile.diameter;
+  const auto& a = s.projectile.aim;
+  if (std::abs(a[0]) + r >= 0.5 * s.target.size[0] || std::abs(a[1]) + r >= 0.5 * s.target.size[1])
+    throw std::runtime_error(at + "pulse.radius_m = " + number_text(r) + " about projectile.aim_m = ["
+                             + number_text(a[0]) + ", " + number_text(a[1]) + "]: the loaded disc must lie inside "
+                             "the slab's face (target.size_m = [" + number_text(s.target.size[0]) + ", "
+                             + number_text(s.target.size[1]) + "] m)");
 }
 
 Scenario read_sections(Reader& r, const std::filesystem::path& file)
@@ -585,6 +630,7 @@ Scenario read_sections(Reader& r, const std::filesystem::path& file)
   s.projectile = read_projectile(r);
   s.run = read_run(r);
   s.shells = read_shells(r);
+  s.pulse = read_pulse(r);
   s.resolved = r.resolved();
   s.resolved["material.file"] = s.material.file;
   if (!s.target.packing_file.empty())
@@ -626,6 +672,11 @@ void check_path(const Scenario& s)
 
 } // namespace
 
+double PulseSpec::force(double t) const
+{
+  return t >= 0.0 && t <= duration ? peak_force * std::sin(std::numbers::pi * t / duration) : 0.0;
+}
+
 std::string number_text(double v)
 {
   std::ostringstream s;
@@ -639,7 +690,7 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
   toml::table root;
   if (!std::filesystem::is_regular_file(file))
     throw std::runtime_error("scenario " + file.string() + ": no such file (give a scenario file, or the name of "
-                             "a shipped one: small, small-rc, small-slab, hanchak-48, semi-infinite)");
+                             "a shipped one: small, small-rc, small-slab, elastic-slab, hanchak-48, semi-infinite)");
   try
   {
     root = toml::parse_file(file.string());
@@ -678,14 +729,25 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
     throw std::runtime_error("scenario " + file.string() + ": reinforcement.bar_diameter_m = 0: give the bars' "
                              "diameter (> 0 m) with layers or bars_m");
   bar_lines(s); // the layout's own checks
-  check_path(s);
-  try
+  check_pulse(s);
+  const auto& pts = s.shells.deflection_points;
+  for (std::size_t q = 0; q < pts.size(); ++q)
+    if (std::abs(pts[q][0]) > 0.5 * s.target.size[0] || std::abs(pts[q][1]) > 0.5 * s.target.size[1])
+      throw std::runtime_error("scenario " + file.string() + ": shells.deflection_points_m: point " + std::to_string(q)
+                               + " (" + number_text(pts[q][0]) + ", " + number_text(pts[q][1]) + ") m lies outside "
+                               "the slab's plan (target.size_m = [" + number_text(s.target.size[0]) + ", "
+                               + number_text(s.target.size[1]) + "] m)");
+  if (!s.pulse.any()) // a pulse loads the slab in the projectile's place: only its aim is used
   {
-    projectile_shape(s.projectile);
-  }
-  catch (const std::exception& e)
-  {
-    throw std::runtime_error("scenario " + file.string() + ": " + e.what());
+    check_path(s);
+    try
+    {
+      projectile_shape(s.projectile);
+    }
+    catch (const std::exception& e)
+    {
+      throw std::runtime_error("scenario " + file.string() + ": " + e.what());
+    }
   }
   const TargetSpec& t = s.target;
   if (!t.packing_file.empty() && !std::filesystem::is_regular_file(t.packing_file))

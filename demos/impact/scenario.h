@@ -50,6 +50,9 @@ struct TargetSpec
   double fine_radius = 0.0;
   double fine_mean_radius = 0.0;        ///< their mean radius [m]; 0 = mean_radius / 2
   double fine_transition = 0.0;         ///< width over which the radii grow to mean_radius [m]; 0 = 4 mean_radius
+  /// stiffen the links of the spheres near the slab's faces (dem/skin.h),
+  /// which are soft in bending without it
+  bool skin_compensation = false;
   bool fine() const { return fine_radius > 0.0; }
   double fine_mean() const { return fine_mean_radius > 0.0 ? fine_mean_radius : 0.5 * mean_radius; }
   double transition() const { return fine_transition > 0.0 ? fine_transition : 4.0 * mean_radius; }
@@ -121,6 +124,22 @@ struct ShellSpec
   /// points (x, y) whose deflection history.csv follows: the nearest shell node's [m]
   std::vector<std::array<double, 2>> deflection_points;
   bool coupled() const { return model == "coupled"; }
+  bool shells_only() const { return model == "fe"; }
+};
+
+/// A prescribed load in place of the projectile (docs/impact.md, "Elastic
+/// checks"): a half-sine pulse F(t) = peak sin(pi t / duration) for t in
+/// [0, duration], zero after, along -z, spread evenly over a disc of the
+/// struck face centred on projectile.aim_m. The same pulse loads the
+/// three models (the spheres under the disc; the shells' nodes in it).
+struct PulseSpec
+{
+  double peak_force = 0.0; ///< [N]; 0 = none (the projectile strikes)
+  double duration = 0.0;   ///< [s]
+  double radius = 0.0;     ///< the loaded disc's [m]; 0 = projectile.diameter_m / 2
+  bool any() const { return peak_force > 0.0; }
+  /// F(t) [N]
+  double force(double t) const;
 };
 
 struct Scenario
@@ -133,6 +152,7 @@ struct Scenario
   ProjectileSpec projectile;
   RunSpec run;
   ShellSpec shells;
+  PulseSpec pulse;
   /// Every key with the value used (defaults included), "section.key" ->
   /// value: echoed at the start, written to the summary, compared on restart.
   nlohmann::json resolved;

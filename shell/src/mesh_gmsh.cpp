@@ -133,6 +133,9 @@ void SlabOutline::validate() const
       throw std::runtime_error("hole radius " + number_text(radius) + " m: must be > 0");
     reach = {radius, radius};
   }
+  if (hole == Hole::none && !(centre[0] > 0.0 && centre[0] < lx && centre[1] > 0.0 && centre[1] < ly))
+    throw std::runtime_error("the centre (" + number_text(centre[0]) + ", " + number_text(centre[1]) + ") m must lie "
+                             "strictly inside the slab [0, " + number_text(lx) + "] x [0, " + number_text(ly) + "] m");
   if (hole != Hole::none
       && !(centre[0] - reach[0] > 0.0 && centre[0] + reach[0] < lx && centre[1] - reach[1] > 0.0
            && centre[1] + reach[1] < ly))
@@ -158,8 +161,13 @@ std::shared_ptr<dolfinx::mesh::Mesh> mesh_outline(MPI_Comm comm, const SlabOutli
   }
   else if (o.hole == SlabOutline::Hole::circle)
     loops.push_back(circle(o.centre, o.radius, o.size));
-  gmsh::model::geo::addPlaneSurface(loops);
+  const int surface = gmsh::model::geo::addPlaneSurface(loops);
+  // no hole: a node at the centre, where the elements are `size` (graded to
+  // the corners' from there)
+  const int centre = o.hole == SlabOutline::Hole::none ? gmsh::model::geo::addPoint(o.centre[0], o.centre[1], 0.0, o.size) : -1;
   gmsh::model::geo::synchronize();
+  if (centre >= 0)
+    gmsh::model::mesh::embed(0, {centre}, 2, surface);
   gmsh::option::setNumber("Mesh.MeshSizeMax", std::max(o.size, outer));
   if (cell == Cell::quadrilateral)
   {

@@ -27,7 +27,9 @@ struct SlabOutline
   };
   double lx = 0.0, ly = 0.0; ///< [m]
   Hole hole = Hole::none;
-  std::array<double, 2> centre{0.0, 0.0}; ///< the hole's centre [m]
+  /// the hole's centre; without a hole a node is placed there, where the
+  /// elements are `size` [m]
+  std::array<double, 2> centre{0.0, 0.0};
   std::array<double, 2> half{0.0, 0.0};   ///< a rectangular hole's half sizes [m]
   double radius = 0.0;                    ///< a circular hole's radius [m]
   double size = 0.0;                      ///< the elements' target size [m] (at the hole)
