@@ -7,7 +7,8 @@ checks that:
 - every grid has cells (vertex cells for the particles, one per sphere);
 - the expected point arrays are there together on one grid, as 64-bit
   floats (the shell's displacement and velocity, the particles' radius,
-  displacement, velocity and damage).
+  displacement, velocity and damage); a shell's grid also carries its
+  section's cell arrays (stresses, forces, moments: 9 components each).
 
 Usage: pvpython paraview_check.py FILE.xdmf ...
 Prints a line per file and reader; exits 1 on any problem.
@@ -21,6 +22,10 @@ from paraview.simple import Delete, XDMFReader, Xdmf3ReaderS, Xdmf3ReaderT
 EXPECTED = {
     "particles": {"radius", "displacement", "velocity", "damage"},
     "shell": {"displacement", "velocity"},
+}
+CELL_EXPECTED = {
+    "particles": set(),
+    "shell": {"stress_top", "stress_bottom", "membrane_force", "bending_moment"},
 }
 
 
@@ -67,8 +72,19 @@ def check(path, make, name):
             arr = d.GetPointData().GetArray(a)
             if arr.GetDataTypeAsString() != "double":
                 problems.append(f"array {a} is {arr.GetDataTypeAsString()}, not double")
+        cells = {d.GetCellData().GetArrayName(i) for i in range(d.GetCellData().GetNumberOfArrays())}
+        # shells (triangles, quadrilaterals) carry their section's tensors;
+        # bars (polylines) and solids do not
+        shells = re.search(r'TopologyType="(Triangle|Quadrilateral)"', text) is not None
+        for a in CELL_EXPECTED[grid] if shells else ():
+            arr = d.GetCellData().GetArray(a)
+            if arr is None:
+                problems.append(f"no cell array {a}")
+            elif arr.GetNumberOfComponents() != 9 or arr.GetNumberOfTuples() != d.GetNumberOfCells():
+                problems.append(f"cell array {a}: {arr.GetNumberOfComponents()} components, "
+                                f"{arr.GetNumberOfTuples()} tuples for {d.GetNumberOfCells()} cells")
         print(f"{path}: {name}: {len(steps)} steps, {d.GetNumberOfPoints()} points, "
-              f"{d.GetNumberOfCells()} cells, arrays {sorted(names)}")
+              f"{d.GetNumberOfCells()} cells, arrays {sorted(names)}, cell arrays {sorted(cells)}")
     if not found:
         problems.append(f"no grid with the arrays {sorted(EXPECTED[grid])} together")
     Delete(reader)

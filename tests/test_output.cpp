@@ -77,6 +77,17 @@ TEST_CASE("cantilever output: XDMF/HDF5 fields and time steps, CSV history", "[i
       CHECK(dims[1] == 3);
       CHECK(finite);
     }
+  // the section's tensors per cell (FEModel::section_stresses)
+  const std::vector<std::string> sections = {"stress_top", "stress_bottom", "membrane_force", "bending_moment"};
+  for (long k = 0; k < frames; ++k)
+    for (const auto& field : sections)
+    {
+      INFO(field << " at frame " << k);
+      const auto [dims, finite] = inspect(f, "/frame_" + std::to_string(k) + "/" + field);
+      CHECK(dims[0] > 0);
+      CHECK(dims[1] == 9);
+      CHECK(finite);
+    }
   const auto [gdims, gfinite] = inspect(f, "/mesh/geometry");
   CHECK(gdims[0] == nodes);
   CHECK(gdims[1] == 3);
@@ -99,7 +110,8 @@ TEST_CASE("cantilever output: XDMF/HDF5 fields and time steps, CSV history", "[i
     const std::string tag = "NumberType=\"Float\" Precision=\"8\"";
     doubles += text.compare(p, tag.size(), tag) == 0;
   }
-  CHECK(floats == static_cast<std::size_t>(frames) * (1 + fields.size()));
+  CHECK(floats == static_cast<std::size_t>(frames) * (1 + fields.size() + sections.size()));
+  CHECK(text.find("AttributeType=\"Tensor\" Center=\"Cell\"") != std::string::npos);
   CHECK(doubles == floats);
 
   // CSV: header + one row per frame

@@ -295,3 +295,70 @@ TEST_CASE("pressure on a rotated plate: resultant and cantilever under uniform l
   const double ref = q * std::pow(L, 4) / (8 * E * I) + q * L * L / (2 * 5.0 / 6 * G * A);
   CHECK(std::abs(tip / ref - 1.0) < 0.015);
 }
+
+TEST_CASE("section stresses: a uniform stretch and a pure bending against plate theory", "[shell]")
+{
+  // Constant fields, so the cell averages are exact: a stretch u_x = e x
+  // gives sigma_xx = E e / (1 - nu^2), sigma_yy = nu sigma_xx on both faces
+  // and N = h sigma; a bending theta_y = k x, w = -k x^2 / 2 (no shear
+  // strain) gives +-E k h / (2 (1 - nu^2)) at the faces and M_xx = E h^3 k /
+  // (12 (1 - nu^2)), M_yy = nu M_xx. The plate placed in space rotated, the
+  // fields and the tensors rotate with it (R s R^T).
+  const double E = 30e9, nu = 0.2, h = 0.25, e = 1e-4, k = 1e-3;
+  const double Ep = E / (1 - nu * nu);
+  for (auto cell : {shell::Cell::quadrilateral, shell::Cell::triangle})
+    for (bool rotated : {false, true})
+    {
+      INFO(shell::to_string(cell) << (rotated ? ", rotated" : ""));
+      const auto p = rotated ? shell::Placement::rotation_about({0, 1, 1}, 0.3) : shell::Placement{};
+      shell::FEModel model(shell::create_shell_rectangle(MPI_COMM_WORLD, 0.4, 0.2, 4, 2, cell, p), shell::Material{});
+      const auto& R = p.rotation; // row-major
+      auto global = [&](std::array<double, 3> a)
+      {
+        return std::array<double, 3>{R[0] * a[0] + R[1] * a[1] + R[2] * a[2], R[3] * a[0] + R[4] * a[1] + R[5] * a[2],
+                                     R[6] * a[0] + R[7] * a[1] + R[8] * a[2]};
+      };
+      const auto x = model.node_coordinates();
+      for (int load = 0; load < 2; ++load)
+      {
+        std::vector<double> u(model.num_dofs(), 0.0);
+        for (std::size_t n = 0; n < model.num_nodes(); ++n)
+        {
+          // the local x: R^T (x - origin)
+          const double xl = R[0] * (x[3 * n] - p.origin[0]) + R[3] * (x[3 * n + 1] - p.origin[1])
+                            + R[6] * (x[3 * n + 2] - p.origin[2]);
+          const auto t = global(load == 0 ? std::array<double, 3>{e * xl, 0, 0}
+                                          : std::array<double, 3>{0, 0, -0.5 * k * xl * xl});
+          const auto r = global(load == 0 ? std::array<double, 3>{0, 0, 0} : std::array<double, 3>{0, k * xl, 0});
+          for (int c = 0; c < 3; ++c)
+          {
+            u[6 * n + c] = t[c];
+            u[6 * n + 3 + c] = r[c];
+          }
+        }
+        // the local tensors: top, bottom, N, M (xx, yy; the rest 0)
+        const double top = load == 0 ? Ep * e : 0.5 * Ep * k * h;
+        const double bottom = load == 0 ? Ep * e : -0.5 * Ep * k * h;
+        const double N = load == 0 ? h * Ep * e : 0.0, M = load == 0 ? 0.0 : Ep * h * h * h / 12 * k;
+        const double scale[4] = {Ep * e, Ep * e, h * Ep * e, Ep * h * h * h / 12 * k};
+        const double xx[4] = {top, bottom, N, M};
+        const auto s = model.section_stresses(u);
+        double worst = 0.0;
+        for (std::size_t c = 0; c < model.num_cells(); ++c)
+          for (int f = 0; f < 4; ++f)
+            for (int i = 0; i < 3; ++i)
+              for (int j = 0; j < 3; ++j)
+              {
+                // R diag(xx, nu xx, 0) R^T
+                const double want = xx[f] * (R[3 * i] * R[3 * j] + nu * R[3 * i + 1] * R[3 * j + 1]);
+                worst = std::max(worst, std::abs(s[36 * c + 9 * f + 3 * i + j] - want) / scale[f]);
+              }
+        INFO("load " << load << ": worst deviation " << worst << " of the scale");
+        CHECK(worst < 1e-9);
+      }
+    }
+  shell::FEModel solid(shell::create_solid_box(MPI_COMM_WORLD, {0.1, 0.1, 0.1}, {1, 1, 1}, shell::Cell::hexahedron),
+                       shell::Material{});
+  CHECK_THROWS_WITH(solid.section_stresses(std::vector<double>(solid.num_dofs(), 0.0)),
+                    Catch::Contains("only for shell models"));
+}

@@ -170,4 +170,25 @@ m_lumped = ((rho * h + steel[6]) * (vu[0] + vu[1] + vu[2])
 # Tributary mid-surface area of each node (on its first dof).
 measure = vu[0] * dx_full
 
-forms = [a, F, m_lumped, measure]
+# The section's stresses, averaged over each cell (the output's; no energy
+# weight: they are the physical ones), in the global frame: the concrete's
+# plane stresses at the +n face, C (eps + h/2 kappa), and at the -n face,
+# C (eps - h/2 kappa), the membrane forces h C eps [N/m] and the bending
+# moments h^3/12 C kappa [N m/m], each the 3 x 3 tensor P^T s P; last the
+# cell's area, which divides them. The bars' share is not in them.
+Qs = FunctionSpace(mesh, VectorElement("DG", cell, 0, dim=37))
+q = TestFunction(Qs)
+
+
+def global_frame(s2):
+    return P.T * s2 * P
+
+
+section_parts = [global_frame(plane_stress(eps + 0.5 * h * kappa)),
+                 global_frame(plane_stress(eps - 0.5 * h * kappa)),
+                 global_frame(h * plane_stress(eps)),
+                 global_frame(h**3 / 12 * plane_stress(kappa))]
+section_values = [t[i, j] for t in section_parts for i in range(3) for j in range(3)] + [1.0]
+sections = dot(as_vector(section_values), q) * dx_full
+
+forms = [a, F, m_lumped, measure, sections]

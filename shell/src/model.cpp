@@ -125,6 +125,8 @@ struct FormSet
   ufcx_form* measure;
   ufcx_function_space* (*space)(const char*);
   bool shell;
+  ufcx_form* sections = nullptr; ///< shells: the section's stresses (shell.py)
+  ufcx_function_space* (*sections_space)(const char*) = nullptr;
 };
 
 FormSet forms_for(const dolfinx::mesh::Mesh& mesh)
@@ -141,9 +143,11 @@ FormSet forms_for(const dolfinx::mesh::Mesh& mesh)
           + std::to_string(gdim) + ". Give 3D coordinates (x, y, z) to the nodes.");
     if (ct == CellType::triangle)
       return {form_shell_triangle_a, form_shell_triangle_F, form_shell_triangle_m_lumped, form_shell_triangle_measure,
-              functionspace_form_shell_triangle_F, true};
+              functionspace_form_shell_triangle_F, true, form_shell_triangle_sections,
+              functionspace_form_shell_triangle_sections};
     return {form_shell_quadrilateral_a, form_shell_quadrilateral_F,
-            form_shell_quadrilateral_m_lumped, form_shell_quadrilateral_measure, functionspace_form_shell_quadrilateral_F, true};
+            form_shell_quadrilateral_m_lumped, form_shell_quadrilateral_measure, functionspace_form_shell_quadrilateral_F, true,
+            form_shell_quadrilateral_sections, functionspace_form_shell_quadrilateral_sections};
   }
   if (ct == CellType::tetrahedron)
     return {form_solid_tetrahedron_a, form_solid_tetrahedron_F,
@@ -236,7 +240,7 @@ struct FEModel::Impl
   std::shared_ptr<FunctionSpace> V, W;
   std::shared_ptr<Function<double>> eta, U, steel;
   std::map<std::string, std::shared_ptr<const Constant<double>>> constants;
-  std::shared_ptr<Form<double>> a, F, m, measure;
+  std::shared_ptr<Form<double>> a, F, m, measure, sections;
   std::unique_ptr<InternalForce> force;
   std::vector<double> x;             // (nodes, 3)
   std::vector<std::int32_t> cells;   // (cells, npc)
@@ -295,6 +299,14 @@ FEModel::FEModel(std::shared_ptr<dolfinx::mesh::Mesh> mesh, const Material& mate
       dolfinx::fem::create_form<double>(
           *fs.measure, {I.V}, std::map<std::string, std::shared_ptr<const Function<double>>>{},
           std::map<std::string, std::shared_ptr<const Constant<double>>>{}, {}));
+  if (fs.sections)
+  {
+    auto Q = std::make_shared<FunctionSpace>(dolfinx::fem::create_functionspace(fs.sections_space, "q", mesh));
+    const std::map<std::string, std::shared_ptr<const Constant<double>>> c{
+        {"E", I.constants["E"]}, {"nu", I.constants["nu"]}, {"h", I.constants["h"]}};
+    I.sections = std::make_shared<Form<double>>(
+        dolfinx::fem::create_form<double>(*fs.sections, {Q}, {{"U", I.U}}, c, {}));
+  }
 
   // Nodes, cells, node -> weight-space map.
   const auto dm = I.V->dofmap();
@@ -411,6 +423,30 @@ std::vector<double> FEModel::lumped_mass() const
   std::vector<double> m(num_dofs(), 0.0);
   dolfinx::fem::assemble_vector(std::span<double>(m), *_impl->m);
   return m;
+}
+
+std::vector<double> FEModel::section_stresses(std::span<const double> u) const
+{
+  auto& I = *_impl;
+  if (!I.sections)
+    throw std::runtime_error("section stresses exist only for shell models");
+  if (u.size() != num_dofs())
+    throw std::runtime_error("section stresses: " + std::to_string(u.size()) + " dof values for a model of "
+                             + std::to_string(num_dofs()));
+  std::copy(u.begin(), u.end(), I.U->x()->mutable_array().begin());
+  const auto Q = I.sections->function_spaces()[0];
+  const int bs = Q->dofmap()->bs(); // 37: 36 values and the cell's area
+  std::vector<double> b(Q->dofmap()->index_map->size_local() * bs, 0.0);
+  dolfinx::fem::assemble_vector(std::span<double>(b), *I.sections);
+  const std::size_t nc = num_cells();
+  std::vector<double> out(36 * nc);
+  for (std::size_t c = 0; c < nc; ++c)
+  {
+    const double* v = &b[bs * Q->dofmap()->cell_dofs(static_cast<std::int32_t>(c))[0]];
+    for (int k = 0; k < 36; ++k)
+      out[36 * c + k] = v[k] / v[36];
+  }
+  return out;
 }
 
 std::vector<double> FEModel::nodal_measure() const

@@ -47,8 +47,13 @@ std::pair<std::string, std::vector<int>> xdmf_cell(bool shell, int npc)
 }
 } // namespace
 
+/// The shells' section fields (FEModel::section_stresses), cell-centred
+/// tensors, in the order of its columns.
+constexpr const char* section_fields[] = {"stress_top", "stress_bottom", "membrane_force", "bending_moment"};
+
 struct XdmfWriter::Impl
 {
+  const FEModel* model = nullptr;
   std::filesystem::path xdmf, h5;
   hid_t file = -1;
   std::string cell;
@@ -65,6 +70,7 @@ XdmfWriter::XdmfWriter(const FEModel& model, const std::filesystem::path& file)
     : _impl(std::make_unique<Impl>())
 {
   auto& I = *_impl;
+  I.model = &model;
   I.xdmf = file;
   I.h5 = file;
   I.h5.replace_extension(".h5");
@@ -107,6 +113,7 @@ XdmfWriter::XdmfWriter(const FEModel& model, const std::filesystem::path& file,
     : _impl(std::make_unique<Impl>())
 {
   auto& I = *_impl;
+  I.model = &model;
   I.xdmf = file;
   I.h5 = file;
   I.h5.replace_extension(".h5");
@@ -159,6 +166,14 @@ void XdmfWriter::write(double t, std::span<const double> u, std::span<const doub
   {
     field("rotation", u, 3);
     field("angular_velocity", v, 3);
+    const auto sec = I.model->section_stresses(u);
+    std::vector<double> t(9 * I.cells);
+    for (int f = 0; f < 4; ++f)
+    {
+      for (std::size_t c = 0; c < I.cells; ++c)
+        std::copy_n(&sec[36 * c + 9 * f], 9, &t[9 * c]);
+      write_dataset(I.file, g + section_fields[f], t.data(), H5T_NATIVE_DOUBLE, {I.cells, 9});
+    }
   }
   // flushed and the XDMF rewritten at every frame: a stopped run leaves a
   // readable file with every frame written so far
@@ -204,6 +219,12 @@ void XdmfWriter::Impl::write_xdmf() const
       attribute("rotation", f + "rotation");
       attribute("angular_velocity", f + "angular_velocity");
       attribute("normal", "/mesh/normal");
+      for (const char* name : section_fields)
+      {
+        x << "  <Attribute Name=\"" << name << "\" AttributeType=\"Tensor\" Center=\"Cell\">";
+        item(f + name, cells, 9, true);
+        x << "</Attribute>\n";
+      }
     }
     if (weighted)
     {

@@ -129,6 +129,13 @@ public:
   /// Shells: average unit normals at the nodes (mean of the adjacent cells'
   /// unit normals, normalised), shape (num_nodes, 3). Throws for solids.
   std::span<const double> nodal_normals() const;
+  /// Shells: the section's stresses at the dofs u, averaged over each cell,
+  /// shape (cells, 36): [0:9] the concrete's stress at the face on the side
+  /// of the normal, [9:18] at the other face [Pa] (plane stress, linear
+  /// elastic, the bars' share left out), [18:27] the membrane forces [N/m],
+  /// [27:36] the bending moments [N m/m]; each a 3 x 3 tensor in the global
+  /// frame, row-major (shell/forms/shell.py). Throws for solids.
+  std::vector<double> section_stresses(std::span<const double> u) const;
   /// Shells: tributary mid-surface area per node [m^2] (row sums of the area
   /// mass); solids: tributary volume [m^3].
   std::vector<double> nodal_measure() const;

@@ -9,6 +9,12 @@
 /// The file is flushed and the XDMF rewritten at every frame. A model whose
 /// energy weight (FEModel::weight, a coupled model's) is not 1 everywhere
 /// also gets that weight as a scalar node field, `weight`, in every grid.
+/// Shells also carry their section's fields per cell (FEModel::
+/// section_stresses), 3 x 3 tensors in the global frame: `stress_top` and
+/// `stress_bottom`, the concrete's stresses at the face on the side of the
+/// normal and at the other [Pa], `membrane_force` [N/m] and
+/// `bending_moment` [N m/m]. The writer keeps a reference to the model,
+/// which must outlive it.
 
 #include "dembridge/core/checkpoint.h"
 
