@@ -408,7 +408,7 @@ shell::Reinforcement shell_steel(const Scenario& s, double normal_z)
 std::unique_ptr<SlabCoupling> make_slab_coupling(const Scenario& s) { return std::make_unique<CoupledSlab>(s); }
 
 ShellPoints::ShellPoints(const shell::FEModel& fe, const Scenario& s)
-  : _n(s.shells.deflection_points.size()), _dofs(fe.num_dofs())
+  : _n(s.shells.deflection_points.size()), _dofs(fe.num_dofs()), _component(s.pulse.in_plane() ? 0 : 2)
 {
   if (_n == 0)
     return;
@@ -432,7 +432,7 @@ std::vector<double> ShellPoints::deflections(std::span<const double> u) const
     return w;
   _op->interpolate(u, v);
   for (std::size_t q = 0; q < _n; ++q)
-    w[q] = v[3 * q + 2];
+    w[q] = v[3 * q + _component];
   return w;
 }
 

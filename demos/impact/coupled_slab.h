@@ -35,7 +35,7 @@ std::unique_ptr<SlabCoupling> make_slab_coupling(const Scenario& s);
 
 /// The shells' deflection at shells.deflection_points_m: each point located
 /// in its shell element at the mid-surface (bridge::locate), u_z there
-/// interpolated from the element's nodes.
+/// interpolated from the element's nodes (u_x under an in-plane pulse).
 class ShellPoints
 {
 public:
@@ -46,6 +46,7 @@ public:
 private:
   std::unique_ptr<bridge::CouplingOperator> _op;
   std::size_t _n = 0, _dofs = 0;
+  int _component = 2;
 };
 
 struct ImpactConfig;

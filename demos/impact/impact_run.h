@@ -86,7 +86,8 @@ private:
   /// within 2 mean radii of it in plan, through the thickness.
   void locate_points();
   /// The deflection at each point [m]: the coupled slab's shells', or the
-  /// mass-weighted mean u_z of the point's spheres.
+  /// mass-weighted mean u_z of the point's spheres (u_x under an in-plane
+  /// pulse).
   std::vector<double> point_deflections() const;
   void set_up_solver();
   void set_up_supports();

@@ -239,7 +239,7 @@ void ImpactRun::set_up_pulse()
   for (std::size_t i = 0; i < _p.size(); ++i)
   {
     const double* x = &_p.x[3 * i];
-    if (std::hypot(x[0] - aim[0], x[1] - aim[1]) <= radius && x[2] + _p.r[i] >= -_rmin)
+    if (std::hypot(x[0] - aim[0], x[1] - aim[1]) <= radius && (pu.in_plane() || x[2] + _p.r[i] >= -_rmin))
       _loaded.push_back(static_cast<std::int32_t>(i));
   }
   if (_loaded.empty())
@@ -250,7 +250,8 @@ void ImpactRun::set_up_pulse()
       throw std::runtime_error("pulse.radius_m = " + fmt(radius) + " m: the loaded disc reaches the overlap (" +
                                "shells.core_radius_m or core_size_m): load the DE core only");
   const double share = 1.0 / static_cast<double>(_loaded.size());
-  _solver->add_force({"pulse", _loaded, {0.0, 0.0, -1.0}, [pu, share](double t) { return share * pu.force(t); }});
+  const V3 along = pu.in_plane() ? V3{1.0, 0.0, 0.0} : V3{0.0, 0.0, -1.0};
+  _solver->add_force({"pulse", _loaded, along, [pu, share](double t) { return share * pu.force(t); }});
 }
 
 void ImpactRun::locate_points()
@@ -274,12 +275,13 @@ std::vector<double> ImpactRun::point_deflections() const
   if (_coupling)
     return _coupling->point_deflections();
   std::vector<double> w;
+  const int c = _s.pulse.in_plane() ? 0 : 2; // u_z, or u_x under an in-plane pulse
   for (const auto& ids : _point_spheres)
   {
     double mu = 0.0, m = 0.0;
     for (auto i : ids)
     {
-      mu += _p.m[i] * (_p.x[3 * i + 2] - _p.x0[3 * i + 2]);
+      mu += _p.m[i] * (_p.x[3 * i + c] - _p.x0[3 * i + c]);
       m += _p.m[i];
     }
     w.push_back(mu / m);

@@ -582,7 +582,7 @@ ShellSpec read_shells(Reader& r)
 PulseSpec read_pulse(Reader& r)
 {
   r.section("pulse", "a prescribed load in place of the projectile, for elastic checks of the three models: a "
-                     "half-sine force along -z spread over a disc of the struck face centred on projectile.aim_m "
+                     "half-sine force spread over a disc centred on projectile.aim_m "
                      "(docs/impact.md, \"Elastic checks\")");
   PulseSpec p;
   p.peak_force = r.number("peak_force_n", p.peak_force, Allowed::positive(1e12).or_value(0.0, "none: the projectile"),
@@ -591,6 +591,9 @@ PulseSpec read_pulse(Reader& r)
                         "the half sine's duration (needed with peak_force_n) [s]");
   p.radius = r.number("radius_m", p.radius, Allowed::positive(100.0).or_value(0.0, "projectile.diameter_m / 2"),
                       "the loaded disc's radius [m]");
+  p.direction = r.text("direction", p.direction, "-z | x",
+                       "-z: on the struck face, normal to it (bending); x: in the slab's plane, over the disc "
+                       "through the whole thickness (membrane)");
   return p;
 }
 

@@ -129,15 +129,18 @@ struct ShellSpec
 
 /// A prescribed load in place of the projectile (docs/impact.md, "Elastic
 /// checks"): a half-sine pulse F(t) = peak sin(pi t / duration) for t in
-/// [0, duration], zero after, along -z, spread evenly over a disc of the
-/// struck face centred on projectile.aim_m. The same pulse loads the
-/// three models (the spheres under the disc; the shells' nodes in it).
+/// [0, duration], zero after, spread evenly over a disc centred on
+/// projectile.aim_m: along -z on the struck face (bending), or along +x
+/// through the whole thickness (membrane). The same pulse loads the three
+/// models (the spheres under or in the disc; the shells' nodes in it).
 struct PulseSpec
 {
   double peak_force = 0.0; ///< [N]; 0 = none (the projectile strikes)
   double duration = 0.0;   ///< [s]
   double radius = 0.0;     ///< the loaded disc's [m]; 0 = projectile.diameter_m / 2
+  std::string direction = "-z"; ///< -z (on the struck face) | x (in plane, through the thickness)
   bool any() const { return peak_force > 0.0; }
+  bool in_plane() const { return direction == "x"; }
   /// F(t) [N]
   double force(double t) const;
 };

@@ -102,13 +102,14 @@ private:
     for (std::size_t k = 0; k < _fe->num_nodes(); ++k)
       if (std::hypot(x[3 * k] - aim[0], x[3 * k + 1] - aim[1]) <= radius * (1.0 + 1e-9))
       {
-        l.dofs.push_back(static_cast<std::int32_t>(k * _fe->block_size() + 2));
+        l.dofs.push_back(static_cast<std::int32_t>(k * _fe->block_size() + (pu.in_plane() ? 0 : 2)));
         l.weights.push_back(area[k]);
         total += area[k];
       }
-    // the node at the disc's centre always lies in it (mesh_outline)
+    // the node at the disc's centre always lies in it (mesh_outline); -z,
+    // or +x in plane
     for (double& w : l.weights)
-      w *= -1.0 / total;
+      w *= (pu.in_plane() ? 1.0 : -1.0) / total;
     _load_nodes = l.dofs.size();
     return l;
   }
