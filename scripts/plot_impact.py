@@ -1,6 +1,8 @@
 #!/usr/bin/python3
-"""The projectile's history of an impact run: speed along its path, tip
-depth and contact force against time, with the slab's faces marked.
+"""The history of an impact run: the projectile's speed along its path, tip
+depth and contact force against time, with the slab's faces marked; or,
+under a prescribed pulse (any model), the load and the deflection at each
+of shells.deflection_points_m.
 Writes DIR/history.png from DIR/history.csv and DIR/scenario.json.
 Usage: /usr/bin/python3 scripts/plot_impact.py DIR"""
 import csv
@@ -21,6 +23,8 @@ def main(root):
     with open(os.path.join(root, "scenario.json")) as f:
         sc = json.load(f)
     t = [1e3 * v for v in col["time_s"]]
+    if "load_n" in col:
+        return pulse(root, sc, t, col)
     fig, ax = plt.subplots(3, 1, figsize=(7, 8), sharex=True)
     ax[0].plot(t, col["path_velocity_m_s"], color="tab:red")
     ax[0].set_ylabel("velocity along the path [m/s]")
@@ -35,6 +39,27 @@ def main(root):
     ax[2].plot(t, [1e-3 * v for v in col["contact_force_n"]], color="tab:green")
     ax[2].set_ylabel("contact force [kN]")
     ax[2].set_xlabel("time [ms]")
+    for a in ax:
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(os.path.join(root, "history.png"), dpi=110)
+
+
+def pulse(root, sc, t, col):
+    """The load and the deflections of a run under a pulse."""
+    fig, ax = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    ax[0].plot(t, [1e-3 * v for v in col["load_n"]], color="tab:green")
+    ax[0].set_ylabel("load [kN]")
+    ax[0].set_title(f"{sc['scenario.name']} ({sc['shells.model']}): a {sc['pulse.peak_force_n'] * 1e-3:g} kN pulse "
+                    f"over {sc['pulse.duration_s'] * 1e3:g} ms")
+    points = sc["shells.deflection_points_m"]
+    for q, p in enumerate(points):
+        ax[1].plot(t, [1e6 * v for v in col[f"deflection_{q}_m"]], label=f"({p[0]:g}, {p[1]:g}) m")
+    if points:
+        ax[1].legend()
+    axis = "u_x" if sc["pulse.direction"] == "x" else "u_z"
+    ax[1].set_ylabel(f"{axis} at the points [um]")
+    ax[1].set_xlabel("time [ms]")
     for a in ax:
         a.grid(alpha=0.3)
     fig.tight_layout()

@@ -21,6 +21,7 @@ usage: ring_waves.py IMPACT SCENARIO OUTDIR
 """
 import bisect
 import csv
+import json
 import math
 import subprocess
 import sys
@@ -28,18 +29,20 @@ from pathlib import Path
 
 
 def run(impact, scenario, out, model, direction):
+    """The velocities at the deflection points, and the scenario as used."""
     d = out / f"{model}_{direction.strip('-')}"
     cmd = [impact, scenario, "--model", model, "--output", str(d), "--plot", "0",
            "--set", f'pulse.direction="{direction}"']
     done = subprocess.run(cmd, capture_output=True, text=True)
     if done.returncode != 0:
         sys.exit(f"FAIL: {' '.join(cmd)} exited {done.returncode}:\n{done.stderr[-2000:]}")
+    used = json.load(open(d / "scenario.json"))
     rows = list(csv.DictReader(open(d / "history.csv")))
     t = [float(r["time_s"]) for r in rows]
     cols = [k for k in rows[0] if k.startswith("deflection_")]
     w = [[float(r[c]) for r in rows] for c in cols]
     v = [[(x[k + 1] - x[k - 1]) / (t[k + 1] - t[k - 1]) for k in range(1, len(t) - 1)] for x in w]
-    return t[1:-1], v
+    return t[1:-1], v, used
 
 
 def at(t, v, x):
@@ -50,12 +53,12 @@ def at(t, v, x):
 
 def main():
     impact, scenario, out = sys.argv[1], sys.argv[2], Path(sys.argv[3])
-    points = [(0.12, 0.0), (0.0, 0.16), (0.2, 0.0), (0.17, 0.17)]  # as in the scenario
-    half = 0.4                                                       # the slab's half size [m]
     failures = []
     for direction, speed, name in (("-z", 2300.0, "bending"), ("x", 3600.0, "membrane")):
-        tf, vf = run(impact, scenario, out, "fe", direction)
-        tc, vc = run(impact, scenario, out, "coupled", direction)
+        tf, vf, used = run(impact, scenario, out, "fe", direction)
+        tc, vc, _ = run(impact, scenario, out, "coupled", direction)
+        points = used["shells.deflection_points_m"]
+        half = 0.5 * min(used["target.size_m"])  # the nearest edge's distance from the centre [m]
         num = den = 0.0
         for q, (x, y) in enumerate(points):
             r = math.hypot(x, y)

@@ -128,6 +128,7 @@ public:
     o.dt = step.dt;
     o.safety = step.safety; // checked by slab_spec: at most 0.95
     o.damping_de = step.damping;
+    o.damping_fe = step.damping; // the shells as the spheres (and as the all-shell slab's)
     o.skin = step.skin;
     o.body_contacts = true;
     try
@@ -282,7 +283,7 @@ private:
     const double reach = _spec.core == bridge::SlabSpec::Core::box ? std::min(_spec.core_half[0], _spec.core_half[1])
                                                                    : _spec.core_radius;
     if (r > reach)
-      throw std::runtime_error("pulse.radius_m = " + number_text(r) + " m: the loaded disc reaches beyond the DE core ("
+      throw std::runtime_error(pulse_radius_text(_s) + ": the loaded disc reaches beyond the DE core ("
                                + _overlap.what() + "): load the core only (a smaller disc, or a larger core)");
   }
 
@@ -430,6 +431,9 @@ std::vector<double> ShellPoints::deflections(std::span<const double> u) const
   std::vector<double> v(3 * _n), w(_n);
   if (_n == 0)
     return w;
+  if (u.size() != _dofs)
+    throw std::runtime_error("ShellPoints: " + std::to_string(u.size()) + " dof values for shells of "
+                             + std::to_string(_dofs));
   _op->interpolate(u, v);
   for (std::size_t q = 0; q < _n; ++q)
     w[q] = v[3 * q + _component];

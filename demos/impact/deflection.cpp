@@ -85,6 +85,8 @@ void DeflectionTrack::load(const checkpoint::Group& g)
     _crossings[q].assign(flat.begin() + at, flat.begin() + at + n);
     at += n;
   }
+  if (at != flat.size())
+    g.fail("crossings", "more values than the counts say (file damaged?)");
 }
 
 } // namespace dembridge::demo

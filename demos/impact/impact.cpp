@@ -333,9 +333,14 @@ void ImpactRun::report_pulse()
   const auto e = _solver->energy();
   const ShellsEnergy f = shells_energy();
   const double unbooked = e.imbalance() + f.imbalance;
-  _out["energy"] = {{"load_work_j", e.external_work},     {"target_kinetic_j", e.kinetic},
-                    {"elastic_j", e.elastic},               {"dissipated_j", e.softening + e.compaction + e.breakage + e.friction + e.damping},
-                    {"support_work_j", e.prescribed_work}, {"imbalance_j", unbooked},
+  // as history.csv's columns: the bars' terms with the spheres'
+  _out["energy"] = {{"load_work_j", e.external_work},
+                    {"target_kinetic_j", e.kinetic + e.bar_kinetic},
+                    {"elastic_j", e.elastic + e.bar_elastic},
+                    {"dissipated_j", e.softening + e.compaction + e.breakage + e.friction + e.damping + e.bar_plastic
+                                         + e.bar_opening + e.bar_slip + e.bar_broken},
+                    {"support_work_j", e.prescribed_work},
+                    {"imbalance_j", unbooked},
                     {"imbalance_share", e.external_work != 0.0 ? unbooked / std::abs(e.external_work) : 0.0}};
   if (_coupling)
   {

@@ -573,9 +573,11 @@ ShellSpec read_shells(Reader& r)
                    "supported, none: free)");
   s.weight_floor = r.number("weight_floor", s.weight_floor, Allowed::open(0.0, 1.0),
                             "floor of the weighted masses in the overlap [-]");
-  s.deflection_points = r.points("deflection_points_m", "points (x, y) whose deflection history.csv follows: "
-                                                         "the nearest shell node's, or with spheres there the "
-                                                         "mean of those within 2 mean radii in plan [m]");
+  s.deflection_points = r.points("deflection_points_m", "points (x, y) whose deflection (u_z; u_x under an "
+                                                         "in-plane pulse) history.csv and the summary follow: on "
+                                                         "shells interpolated in the element at the mid-surface, "
+                                                         "with spheres there the mean of those within 2 mean "
+                                                         "radii in plan [m]");
   return s;
 }
 
@@ -615,7 +617,7 @@ void check_pulse(const Scenario& s)
   const double r = p.radius > 0.0 ? p.radius : 0.5 * s.projectile.diameter;
   const auto& a = s.projectile.aim;
   if (std::abs(a[0]) + r >= 0.5 * s.target.size[0] || std::abs(a[1]) + r >= 0.5 * s.target.size[1])
-    throw std::runtime_error(at + "pulse.radius_m = " + number_text(r) + " about projectile.aim_m = ["
+    throw std::runtime_error(at + pulse_radius_text(s) + " about projectile.aim_m = ["
                              + number_text(a[0]) + ", " + number_text(a[1]) + "]: the loaded disc must lie inside "
                              "the slab's face (target.size_m = [" + number_text(s.target.size[0]) + ", "
                              + number_text(s.target.size[1]) + "] m)");
@@ -674,6 +676,14 @@ void check_path(const Scenario& s)
 }
 
 } // namespace
+
+std::string pulse_radius_text(const Scenario& s)
+{
+  const PulseSpec& p = s.pulse;
+  return p.radius > 0.0 ? "pulse.radius_m = " + number_text(p.radius) + " m"
+                        : "pulse.radius_m = 0 (projectile.diameter_m / 2 = " + number_text(0.5 * s.projectile.diameter)
+                              + " m)";
+}
 
 double PulseSpec::force(double t) const
 {

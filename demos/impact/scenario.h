@@ -121,7 +121,8 @@ struct ShellSpec
   std::string cell = "quadrilateral"; ///< quadrilateral | triangle
   std::string edges;               ///< free | simply-supported | clamped; "" = from target.supports
   double weight_floor = 1e-3;      ///< of the weighted masses (bridge::CouplingOptions) [-]
-  /// points (x, y) whose deflection history.csv follows: the nearest shell node's [m]
+  /// points (x, y) whose deflection history.csv follows: on shells interpolated in the
+  /// element at the mid-surface, on spheres the mean of those within 2 mean radii [m]
   std::vector<std::array<double, 2>> deflection_points;
   bool coupled() const { return model == "coupled"; }
   bool shells_only() const { return model == "fe"; }
@@ -195,6 +196,10 @@ std::function<double(const dem::Point&)> fine_scale(const Scenario& s);
 /// The scenario keys with their meaning, unit and default, one per line
 /// (`impact --keys`; docs/impact.md lists the same).
 std::string scenario_keys();
+
+/// "pulse.radius_m = R m", or for the default the projectile's half diameter
+/// it stands for, as the messages name the pulse's disc.
+std::string pulse_radius_text(const Scenario& s);
 
 /// A number as the scenario's messages print it (12 significant digits).
 std::string number_text(double v);

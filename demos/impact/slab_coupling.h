@@ -68,7 +68,7 @@ public:
   virtual ShellsEnergy energy() const = 0;
   virtual double max_deflection() const = 0;   ///< largest |u_z| of the shells [m]
   virtual double support_reaction() const = 0; ///< the supports' force along z on the shells [N]
-  /// u_z at shells.deflection_points_m (their nearest shell nodes) [m]
+  /// u_z at shells.deflection_points_m, interpolated in their shell elements (u_x under an in-plane pulse) [m]
   virtual std::vector<double> point_deflections() const = 0;
   /// The shells' output (shell.xdmf), new or continued from a checkpoint.
   virtual void open_output(const std::filesystem::path& dir, const checkpoint::Group* root) = 0;

@@ -436,7 +436,8 @@ std::vector<double> FEModel::section_stresses(std::span<const double> u) const
   std::copy(u.begin(), u.end(), I.U->x()->mutable_array().begin());
   const auto Q = I.sections->function_spaces()[0];
   const int bs = Q->dofmap()->bs(); // 37: 36 values and the cell's area
-  std::vector<double> b(Q->dofmap()->index_map->size_local() * bs, 0.0);
+  const auto im = Q->dofmap()->index_map;
+  std::vector<double> b((im->size_local() + im->num_ghosts()) * bs, 0.0);
   dolfinx::fem::assemble_vector(std::span<double>(b), *I.sections);
   const std::size_t nc = num_cells();
   std::vector<double> out(36 * nc);

@@ -167,12 +167,12 @@ void XdmfWriter::write(double t, std::span<const double> u, std::span<const doub
     field("rotation", u, 3);
     field("angular_velocity", v, 3);
     const auto sec = I.model->section_stresses(u);
-    std::vector<double> t(9 * I.cells);
+    std::vector<double> tensor(9 * I.cells);
     for (int f = 0; f < 4; ++f)
     {
       for (std::size_t c = 0; c < I.cells; ++c)
-        std::copy_n(&sec[36 * c + 9 * f], 9, &t[9 * c]);
-      write_dataset(I.file, g + section_fields[f], t.data(), H5T_NATIVE_DOUBLE, {I.cells, 9});
+        std::copy_n(&sec[36 * c + 9 * f], 9, &tensor[9 * c]);
+      write_dataset(I.file, g + section_fields[f], tensor.data(), H5T_NATIVE_DOUBLE, {I.cells, 9});
     }
   }
   // flushed and the XDMF rewritten at every frame: a stopped run leaves a
