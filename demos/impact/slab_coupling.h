@@ -36,7 +36,7 @@ struct CouplingStep
 {
   double dt = 0.0;     ///< [s]; 0 = safety x the coupled critical step
   double safety = 0.8; ///< [-]
-  double damping = 0.0; ///< of the spheres [1/s]
+  double damping = 0.0; ///< of the spheres and the shells alike [1/s]
   double skin = 0.0;   ///< neighbour skin [m]
 };
 
