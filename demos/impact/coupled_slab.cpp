@@ -172,25 +172,8 @@ public:
     return {e.kinetic, e.strain, e.imbalance(), _cs->multiplier_work()};
   }
 
-  double max_deflection() const override
-  {
-    const auto u = _cs->fe().u();
-    const int bs = _fe->block_size();
-    double w = 0.0;
-    for (std::size_t k = 0; k < _fe->num_nodes(); ++k)
-      w = std::max(w, std::abs(u[bs * k + 2]));
-    return w;
-  }
-
-  double support_reaction() const override
-  {
-    const auto r = _cs->fe().reactions();
-    const int bs = _fe->block_size();
-    double f = 0.0;
-    for (std::size_t k = 0; k < _fe->num_nodes(); ++k)
-      f += r[bs * k + 2];
-    return f;
-  }
+  double max_deflection() const override { return demo::max_deflection(*_fe, _cs->fe().u()); }
+  double support_reaction() const override { return z_reaction(*_fe, _cs->fe().reactions()); }
 
   std::vector<double> point_deflections() const override { return _points->deflections(_cs->fe().u()); }
 
@@ -256,8 +239,8 @@ public:
   }
 
 private:
-  /// shells.deflection_points_m on the shells: inside the slab's plan, not
-  /// in the core (no shell there).
+  /// shells.deflection_points_m on the shells: not in the core (no shell
+  /// there; points outside the plan were refused with the scenario).
   void check_points() const
   {
     const auto& pts = _s.shells.deflection_points;
@@ -266,8 +249,6 @@ private:
       const auto& x = pts[q];
       const std::string at = "shells.deflection_points_m: point " + std::to_string(q) + " (" + number_text(x[0])
                              + ", " + number_text(x[1]) + ") m ";
-      if (std::abs(x[0]) > 0.5 * _spec.size[0] || std::abs(x[1]) > 0.5 * _spec.size[1])
-        throw std::runtime_error(at + "lies outside the slab's plan (target.size_m)");
       if (_overlap.distance({x[0], x[1], -0.5 * _spec.thickness}) < 0.0)
         throw std::runtime_error(at + "lies in the DE core (" + _overlap.what() + "): no shell there");
     }
@@ -408,20 +389,32 @@ shell::Reinforcement shell_steel(const Scenario& s, double normal_z)
 
 std::unique_ptr<SlabCoupling> make_slab_coupling(const Scenario& s) { return std::make_unique<CoupledSlab>(s); }
 
+double max_deflection(const shell::FEModel& fe, std::span<const double> u)
+{
+  double w = 0.0;
+  for (std::size_t k = 0; k < fe.num_nodes(); ++k)
+    w = std::max(w, std::abs(u[fe.block_size() * k + 2]));
+  return w;
+}
+
+double z_reaction(const shell::FEModel& fe, std::span<const double> r)
+{
+  double f = 0.0;
+  for (std::size_t k = 0; k < fe.num_nodes(); ++k)
+    f += r[fe.block_size() * k + 2];
+  return f;
+}
+
 ShellPoints::ShellPoints(const shell::FEModel& fe, const Scenario& s)
   : _n(s.shells.deflection_points.size()), _dofs(fe.num_dofs()), _component(s.pulse.in_plane() ? 0 : 2)
 {
   if (_n == 0)
     return;
+  // (points outside the slab's plan were refused when the scenario was read)
   const double h = s.target.thickness;
   std::vector<double> pts;
   for (const auto& p : s.shells.deflection_points)
-  {
-    if (std::abs(p[0]) > 0.5 * s.target.size[0] || std::abs(p[1]) > 0.5 * s.target.size[1])
-      throw std::runtime_error("shells.deflection_points_m: point (" + number_text(p[0]) + ", " + number_text(p[1])
-                               + ") m lies outside the slab's plan (target.size_m)");
     pts.insert(pts.end(), {p[0], p[1], -0.5 * h});
-  }
   const bridge::ShellGeometry g{fe.node_coordinates(), fe.nodal_normals(), fe.cell_nodes(), fe.nodes_per_cell(), h};
   _op = std::make_unique<bridge::CouplingOperator>(bridge::locate(g, pts));
 }

@@ -11,6 +11,8 @@
 #include "dembridge/bridge/slab.h"
 #include "dembridge/shell/model.h"
 
+#include <span>
+
 namespace dembridge::demo
 {
 
@@ -48,6 +50,11 @@ private:
   std::size_t _n = 0, _dofs = 0;
   int _component = 2;
 };
+
+/// The shells' largest |u_z| at the dofs u [m], and the z components of the
+/// reactions r summed over the nodes [N].
+double max_deflection(const shell::FEModel& fe, std::span<const double> u);
+double z_reaction(const shell::FEModel& fe, std::span<const double> r);
 
 struct ImpactConfig;
 /// Runs a scenario with shells.model = "fe": the slab all in shells (the

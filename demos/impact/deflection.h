@@ -38,7 +38,9 @@ private:
   double _free_from;
   std::vector<double> _peak, _peak_t, _last;
   double _t_last = -1.0;
-  std::vector<std::vector<double>> _crossings;
+  // the zero crossings after free_from: the first's and the last's times,
+  // and their number (all the period needs)
+  std::vector<double> _first, _latest, _crossings;
 };
 
 } // namespace dembridge::demo

@@ -31,6 +31,16 @@ std::string fmt(double v, int precision)
   return s.str();
 }
 
+double target_kinetic(const DemEnergy& e) { return e.kinetic + e.bar_kinetic; }
+
+double elastic_all(const DemEnergy& e) { return e.elastic + e.body_contact + e.bar_elastic; }
+
+double dissipated(const DemEnergy& e)
+{
+  return e.softening + e.compaction + e.breakage + e.friction + e.body_friction + e.damping + e.bar_plastic
+         + e.bar_opening + e.bar_slip + e.bar_broken;
+}
+
 const char* outcome_name(Outcome o)
 {
   switch (o)
@@ -182,11 +192,8 @@ void ImpactRun::write_row()
   _csv << std::setprecision(10) << _solver->time() << ',' << x[0] << ',' << x[1] << ',' << x[2] << ',' << -x[2]
        << ',' << b.v[0] << ',' << b.v[1] << ',' << b.v[2] << ',' << std::sqrt(dot(b.v, b.v)) << ','
        << path_velocity() << ',' << contact_force() << ',' << _solver->body_contacts(0).ids.size() << ','
-       << broken() << ',' << _solver->removed().count << ',' << e.body_kinetic << ',' << e.kinetic + e.bar_kinetic
-       << ',' << e.elastic + e.body_contact + e.bar_elastic << ','
-       << e.softening + e.compaction + e.breakage + e.friction + e.body_friction + e.damping + e.bar_plastic
-              + e.bar_opening + e.bar_slip + e.bar_broken
-       << ',' << e.removed << ',' << e.imbalance() + f.imbalance;
+       << broken() << ',' << _solver->removed().count << ',' << e.body_kinetic << ',' << target_kinetic(e) << ','
+       << elastic_all(e) << ',' << dissipated(e) << ',' << e.removed << ',' << e.imbalance() + f.imbalance;
   end_row(f);
 }
 
@@ -195,11 +202,8 @@ void ImpactRun::write_pulse_row()
   const auto e = _solver->energy();
   const ShellsEnergy f = shells_energy();
   _csv << std::setprecision(10) << _solver->time() << ',' << _s.pulse.force(_solver->time()) << ','
-       << e.external_work << ',' << broken() << ',' << _solver->removed().count << ','
-       << e.kinetic + e.bar_kinetic << ',' << e.elastic + e.bar_elastic << ','
-       << e.softening + e.compaction + e.breakage + e.friction + e.damping + e.bar_plastic + e.bar_opening
-              + e.bar_slip + e.bar_broken
-       << ',' << e.removed << ',' << e.imbalance() + f.imbalance;
+       << e.external_work << ',' << broken() << ',' << _solver->removed().count << ',' << target_kinetic(e) << ','
+       << elastic_all(e) << ',' << dissipated(e) << ',' << e.removed << ',' << e.imbalance() + f.imbalance;
   end_row(f);
 }
 
@@ -335,10 +339,9 @@ void ImpactRun::report_pulse()
   const double unbooked = e.imbalance() + f.imbalance;
   // as history.csv's columns: the bars' terms with the spheres'
   _out["energy"] = {{"load_work_j", e.external_work},
-                    {"target_kinetic_j", e.kinetic + e.bar_kinetic},
-                    {"elastic_j", e.elastic + e.bar_elastic},
-                    {"dissipated_j", e.softening + e.compaction + e.breakage + e.friction + e.damping + e.bar_plastic
-                                         + e.bar_opening + e.bar_slip + e.bar_broken},
+                    {"target_kinetic_j", target_kinetic(e)},
+                    {"elastic_j", elastic_all(e)},
+                    {"dissipated_j", dissipated(e)},
                     {"support_work_j", e.prescribed_work},
                     {"imbalance_j", unbooked},
                     {"imbalance_share", e.external_work != 0.0 ? unbooked / std::abs(e.external_work) : 0.0}};
@@ -355,33 +358,10 @@ void ImpactRun::report()
 {
   if (pulsed())
     report_pulse();
+  else
+    report_projectile();
   if (_track)
     _out["deflection_points"] = _track->report();
-  if (pulsed())
-  {
-    _out["links_broken"] = broken();
-    _out["steps"] = _solver->steps();
-    _out["time_s"] = _solver->time();
-    if (_coupling)
-      _out["coupling"].update(_coupling->report());
-    _out["peak_memory_mb"] = peak_memory_mb();
-    return;
-  }
-  const RigidBody& b = _solver->body(0);
-  // perforated: it touched the slab and its tail passed the rear face
-  const bool perforated = _outcome == Outcome::perforated
-                          || (_outcome == Outcome::time_up && _touched && -tail()[2] > _s.target.thickness);
-  _out["outcome"] = outcome_name(_outcome);
-  _out["perforated"] = perforated;
-  _out["residual_velocity_m_s"] = perforated ? std::sqrt(dot(b.v, b.v)) : 0.0;
-  _out["final_path_velocity_m_s"] = path_velocity();
-  // without contact, no penetration (the tip's depth alone says nothing)
-  _out["penetration_depth_m"] = _touched ? std::clamp(_max_depth, 0.0, _s.target.thickness) : 0.0;
-  _out["touched"] = _touched;
-  _out["tip_depth_max_m"] = _max_depth;
-  _out["peak_contact_force_n"] = _peak_force;
-  measure_damage();
-  report_energy();
   _out["links_broken"] = broken();
   _out["links_broken_tension"] = _links.count(LinkState::broken_tension);
   _out["links_broken_shear"] = _links.count(LinkState::broken_shear);
@@ -402,6 +382,25 @@ void ImpactRun::report()
   if (_coupling)
     _out["coupling"].update(_coupling->report());
   _out["peak_memory_mb"] = peak_memory_mb();
+}
+
+void ImpactRun::report_projectile()
+{
+  const RigidBody& b = _solver->body(0);
+  // perforated: it touched the slab and its tail passed the rear face
+  const bool perforated = _outcome == Outcome::perforated
+                          || (_outcome == Outcome::time_up && _touched && -tail()[2] > _s.target.thickness);
+  _out["outcome"] = outcome_name(_outcome);
+  _out["perforated"] = perforated;
+  _out["residual_velocity_m_s"] = perforated ? std::sqrt(dot(b.v, b.v)) : 0.0;
+  _out["final_path_velocity_m_s"] = path_velocity();
+  // without contact, no penetration (the tip's depth alone says nothing)
+  _out["penetration_depth_m"] = _touched ? std::clamp(_max_depth, 0.0, _s.target.thickness) : 0.0;
+  _out["touched"] = _touched;
+  _out["tip_depth_max_m"] = _max_depth;
+  _out["peak_contact_force_n"] = _peak_force;
+  measure_damage();
+  report_energy();
 }
 
 void ImpactRun::report_bars()

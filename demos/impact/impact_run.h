@@ -27,6 +27,12 @@ using V3 = std::array<double, 3>;
 
 inline double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 double mean(const std::vector<double>& v);
+/// The budget's terms as history.csv and the summary group them [J]: the
+/// spheres' and bars' kinetic energy; the elastic energy of links, contacts
+/// (the projectile's too) and bars; everything dissipated.
+double target_kinetic(const DemEnergy& e);
+double elastic_all(const DemEnergy& e);
+double dissipated(const DemEnergy& e);
 /// A number with `precision` significant digits, for messages.
 std::string fmt(double v, int precision = 4);
 
@@ -144,6 +150,9 @@ private:
   void report_bars();
   void measure_damage();
   void report_energy();
+  /// The projectile's outcome, speeds, depth, craters and energy partition.
+  void report_projectile();
+  /// Under a pulse: the outcome and the load's energy budget.
   void report_pulse();
   /// The mean damage (broken / initial links) of the overlap's spheres, in
   /// the summary: how far the damage reached into the band.

@@ -245,10 +245,7 @@ void ImpactRun::set_up_pulse()
   if (_loaded.empty())
     throw std::runtime_error(pulse_radius_text(_s) + ": no sphere " + (pu.in_plane() ? "" : "of the struck face ")
                              + "is centred within it of projectile.aim_m; give a larger disc");
-  for (auto i : _loaded)
-    if (!_p.weight.empty() && _p.weight[i] < 1.0) // 1 - eta: 1 in the DE-only core
-      throw std::runtime_error(pulse_radius_text(_s) + ": the loaded disc reaches the overlap ("
-                               "shells.core_radius_m or core_size_m): load the DE core only");
+  // (a coupled slab's disc lies in its core: CoupledSlab::check_pulse)
   const double share = 1.0 / static_cast<double>(_loaded.size());
   const V3 along = pu.in_plane() ? V3{1.0, 0.0, 0.0} : V3{0.0, 0.0, -1.0};
   _solver->add_force({"pulse", _loaded, along, [pu, share](double t) { return share * pu.force(t); }});

@@ -116,21 +116,8 @@ private:
 
   std::vector<double> point_deflections() const { return _points->deflections(_solver->u()); }
 
-  double max_deflection() const
-  {
-    double w = 0.0;
-    for (std::size_t k = 0; k < _fe->num_nodes(); ++k)
-      w = std::max(w, std::abs(_solver->u()[_fe->block_size() * k + 2]));
-    return w;
-  }
-
-  double support_reaction() const
-  {
-    double f = 0.0;
-    for (std::size_t k = 0; k < _fe->num_nodes(); ++k)
-      f += _solver->reactions()[_fe->block_size() * k + 2];
-    return f;
-  }
+  double max_deflection() const { return demo::max_deflection(*_fe, _solver->u()); }
+  double support_reaction() const { return z_reaction(*_fe, _solver->reactions()); }
 
   void describe()
   {
