@@ -362,3 +362,96 @@ TEST_CASE("section stresses: a uniform stretch and a pure bending against plate 
   CHECK_THROWS_WITH(solid.section_stresses(std::vector<double>(solid.num_dofs(), 0.0)),
                     Catch::Contains("only for shell models"));
 }
+
+TEST_CASE("support springs: compression only, their energy exact, a rigid drop bounces back", "[shell]")
+{
+  // A flat 0.4 x 0.4 x 0.05 m plate; a spring on u_z at every node of
+  // stiffness k_a A_i (A_i the node's tributary area), as a frame's bearing.
+  const double h = 0.05, rho = 2400.0, E = 30e9;
+  shell::Material mat;
+  mat.thickness = h;
+  shell::FEModel model(shell::create_shell_rectangle(MPI_COMM_WORLD, 0.4, 0.4, 8, 8, shell::Cell::quadrilateral,
+                                                     shell::Placement{}),
+                       mat);
+  const std::size_t n = model.num_nodes(), nd = model.num_dofs();
+  const double ka = E / (0.5 * h); // [N/m^3]: slab_frame_springs' choice
+  const auto area = model.nodal_measure();
+  std::vector<std::int32_t> dofs;
+  std::vector<double> k;
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    dofs.push_back(static_cast<std::int32_t>(6 * i + 2));
+    k.push_back(ka * area[i]);
+  }
+  const auto mass = model.lumped_mass();
+  const double dt0 = model.critical_time_step(mass);
+  std::vector<double> u(nd, 0.0), f0(nd), f1(nd);
+  for (std::size_t i = 0; i < n; ++i)
+    u[6 * i + 2] = (i % 3 == 0 ? 1.0 : -1.0) * 1e-6 * (1.0 + 0.1 * static_cast<double>(i % 7));
+  model.internal_force(u, f0);
+  model.set_support_springs(dofs, k);
+  model.internal_force(u, f1);
+
+  SECTION("the force pushes only where a dof is below 0, and u f / 2 is the springs' energy")
+  {
+    double energy = 0.0, pushed = 0.0, work = 0.0;
+    for (std::size_t d = 0; d < nd; ++d)
+      work += 0.5 * u[d] * (f1[d] - f0[d]);
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      const double uz = u[6 * i + 2], expect = k[i] * std::min(uz, 0.0);
+      CHECK(std::abs(f1[6 * i + 2] - f0[6 * i + 2] - expect) <= 1e-9 * std::abs(k[i] * 1e-6));
+      energy += 0.5 * k[i] * std::min(uz, 0.0) * std::min(uz, 0.0);
+      pushed -= expect;
+      for (int c : {0, 1, 3, 4, 5})
+        CHECK(f1[6 * i + c] == f0[6 * i + c]);
+    }
+    CHECK_THAT(work, WithinRel(energy, 1e-9));
+    CHECK_THAT(model.support_spring_force(u), WithinRel(pushed, 1e-12));
+    CHECK(pushed > 0.0);
+  }
+  SECTION("the step counts the springs two-sided: below the plate's, above the sum's bound")
+  {
+    // lambda_max(K + P) <= lambda_max(K) + max k/m (both symmetric, M
+    // diagonal), and >= lambda_max(K)
+    const double dt1 = model.critical_time_step(mass);
+    const double kmax = ka / (rho * h); // k_i / m_i, the same at every node
+    CHECK(dt1 < dt0);
+    CHECK(dt1 >= 0.999 * 2.0 / std::sqrt(4.0 / (dt0 * dt0) + kmax));
+  }
+  SECTION("a plate dropped on the springs bounces back at its speed after half their period")
+  {
+    // k_i / m_i is the same everywhere: the plate moves as a rigid body, a
+    // mass on a spring for half its period pi sqrt(rho h / k_a), and leaves
+    // at the speed it came with (no damping). dt: a fiftieth of the contact,
+    // so the leapfrog's phase error (dt^2 omega^2 / 24) is below 1e-4 and
+    // the contact's start and end are found to a step (2 %).
+    const double contact = M_PI * std::sqrt(rho * h / ka), v0 = 1.0;
+    const double dt = std::min(0.5 * dt0, contact / 50.0);
+    shell::ExplicitSolver solver(mass, model.internal_force_fn(), dt);
+    std::vector<double> v(nd, 0.0), zero(nd, 0.0);
+    for (std::size_t i = 0; i < n; ++i)
+      v[6 * i + 2] = -v0;
+    solver.set_state(zero, v);
+    double left = -1.0;
+    for (int s = 0; s < 200 && left < 0.0; ++s)
+    {
+      solver.step();
+      if (solver.time() > dt && solver.u()[2] >= 0.0)
+        left = solver.time();
+    }
+    REQUIRE(left > 0.0);
+    CHECK(std::abs(left - contact) <= 1.5 * dt);
+    for (std::size_t i = 0; i < n; ++i)
+      CHECK(std::abs(solver.v()[6 * i + 2] - v0) < 1e-3 * v0);
+    const auto e = solver.energy();
+    CHECK(std::abs(e.imbalance()) < 1e-3 * e.initial);
+  }
+  SECTION("bad springs are refused, naming the value")
+  {
+    CHECK_THROWS_WITH(model.set_support_springs({2}, {1.0, 2.0}), Catch::Contains("1 dofs but 2 stiffnesses"));
+    CHECK_THROWS_WITH(model.set_support_springs({static_cast<std::int32_t>(nd)}, {1.0}),
+                      Catch::Contains("outside [0, "));
+    CHECK_THROWS_WITH(model.set_support_springs({2}, {0.0}), Catch::Contains("must be > 0"));
+  }
+}

@@ -267,7 +267,7 @@ void CoupledSolver::coupled_time_step(const CouplingOptions& o, const dem::Mater
     for (std::size_t i = 0; i < np; ++i)
       for (int d = 0; d < 3; ++d)
         mass.push_back(rot ? _p.inertia[i] : _p.m[i]);
-  const auto f_fe = _model.internal_force_fn();
+  const auto f_fe = _model.bounding_force_fn();
   auto f_all = [&](std::span<const double> z, std::span<double> f) {
     f_fe(z.first(nf), f.first(nf));
     dem::stiffness_action(_p, _l, z.subspan(nf), f.subspan(nf));

@@ -42,6 +42,13 @@ void SlabSpec::validate() const
   if (element_size > band)
     throw std::runtime_error("shell element size " + number_text(element_size) + " m: must not exceed the overlap band, "
                              + number_text(band) + " m (the band must hold shell nodes across it)");
+  if (edges == Edges::frame)
+    for (int k = 0; k < 2; ++k)
+      if (!(frame_width > 0.0) || !(std::abs(centre[k]) + r[k] + band < 0.5 * size[k] - frame_width))
+        throw std::runtime_error("the frame under the edges, " + number_text(frame_width) + " m wide, must lie beyond "
+                                 "the core and its band (" + number_text(r[k]) + " + " + number_text(band)
+                                 + " m about " + number_text(centre[k]) + " m) in the slab's plan, "
+                                 + number_text(size[0]) + " x " + number_text(size[1]) + " m");
 }
 
 Overlap slab_overlap(const SlabSpec& s)
@@ -88,7 +95,7 @@ std::shared_ptr<dolfinx::mesh::Mesh> slab_shells(MPI_Comm comm, const SlabSpec& 
 
 std::vector<std::int32_t> slab_support_dofs(const shell::FEModel& fe, const SlabSpec& s)
 {
-  if (s.edges == SlabSpec::Edges::free)
+  if (s.edges == SlabSpec::Edges::free || s.edges == SlabSpec::Edges::frame)
     return {};
   const double tol = 1e-9 * std::max(s.size[0], s.size[1]);
   const auto nodes = shell::select_nodes(
@@ -99,6 +106,30 @@ std::vector<std::int32_t> slab_support_dofs(const shell::FEModel& fe, const Slab
   std::vector<int> comps(s.edges == SlabSpec::Edges::clamped ? fe.block_size() : 3);
   std::iota(comps.begin(), comps.end(), 0);
   return shell::node_dofs(nodes, fe.block_size(), comps);
+}
+
+std::size_t slab_frame_springs(shell::FEModel& fe, const SlabSpec& s, double youngs_modulus)
+{
+  if (s.edges != SlabSpec::Edges::frame)
+    return 0;
+  const double tol = 1e-9 * std::max(s.size[0], s.size[1]);
+  const double w = s.frame_width;
+  const auto nodes = shell::select_nodes(
+      fe.node_coordinates(),
+      [&](const std::array<double, 3>& x)
+      { return std::abs(x[0]) > 0.5 * s.size[0] - w - tol || std::abs(x[1]) > 0.5 * s.size[1] - w - tol; },
+      "the frame's strip under the slab's edges (target.support_width_m)");
+  const auto area = fe.nodal_measure();
+  const double per_area = youngs_modulus / (0.5 * s.thickness); // [N/m^3]
+  std::vector<std::int32_t> dofs;
+  std::vector<double> k;
+  for (auto n : nodes)
+  {
+    dofs.push_back(n * fe.block_size() + 2);
+    k.push_back(per_area * area[n]);
+  }
+  fe.set_support_springs(std::move(dofs), std::move(k));
+  return nodes.size();
 }
 
 } // namespace dembridge::bridge

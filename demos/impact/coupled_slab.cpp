@@ -122,6 +122,8 @@ public:
     _fe = std::make_unique<shell::FEModel>(bridge::slab_shells(MPI_COMM_WORLD, _spec), shell_material(_s));
     if (_s.reinforcement.layers > 0)
       _fe->set_reinforcement(shell_steel(_s, _fe->nodal_normals()[2] >= 0.0 ? 1.0 : -1.0));
+    // before the coupler, whose step counts them
+    _frame_nodes = bridge::slab_frame_springs(*_fe, _spec, _fe->material().youngs_modulus);
     bridge::CouplingOptions o;
     o.overlap = _overlap;
     o.weight_floor = _s.shells.weight_floor;
@@ -173,7 +175,10 @@ public:
   }
 
   double max_deflection() const override { return demo::max_deflection(*_fe, _cs->fe().u()); }
-  double support_reaction() const override { return z_reaction(*_fe, _cs->fe().reactions()); }
+  double support_reaction() const override
+  {
+    return z_reaction(*_fe, _cs->fe().reactions()) + _fe->support_spring_force(_cs->fe().u());
+  }
 
   std::vector<double> point_deflections() const override { return _points->deflections(_cs->fe().u()); }
 
@@ -207,7 +212,7 @@ public:
 
   nlohmann::json describe() const override
   {
-    const char* edges[] = {"free", "simply-supported", "clamped"};
+    const char* edges[] = {"free", "simply-supported", "clamped", "frame"};
     return {{"core", _overlap.what()},
             {"band_m", _spec.band},
             {"element_size_m", _spec.element_size},
@@ -216,6 +221,7 @@ public:
             {"shell_nodes", _fe->num_nodes()},
             {"shell_cells", _fe->num_cells()},
             {"supported_shell_dofs", _supports.size()},
+            {"frame_nodes", _frame_nodes},
             {"constrained_particles", _cs->constrained()},
             {"constrained_bar_nodes", _cs->constrained_bar_nodes()},
             {"dt_coupled_s", _cs->dt_coupled()},
@@ -290,6 +296,7 @@ private:
   std::unique_ptr<shell::FEModel> _fe;
   std::unique_ptr<bridge::CoupledSolver> _cs;
   std::vector<std::int32_t> _supports;
+  std::size_t _frame_nodes = 0; // shell nodes on the frame (Edges::frame)
   std::unique_ptr<ShellPoints> _points; // shells.deflection_points_m
   std::unique_ptr<shell::XdmfWriter> _writer;
   double _setup_s = 0.0, _worst = 0.0;
@@ -312,10 +319,13 @@ bridge::SlabSpec slab_plan(const Scenario& s)
   const std::string edges = !sh.edges.empty()             ? sh.edges
                             : t.supports == "sides"       ? "clamped"
                             : t.supports == "rear-edges" ? "simply-supported"
+                            : t.supports == "frame"      ? "frame"
                                                           : "free";
   sp.edges = edges == "clamped"            ? bridge::SlabSpec::Edges::clamped
              : edges == "simply-supported" ? bridge::SlabSpec::Edges::simply_supported
+             : edges == "frame"            ? bridge::SlabSpec::Edges::frame
                                            : bridge::SlabSpec::Edges::free;
+  sp.frame_width = t.support_width;
   return sp;
 }
 

@@ -113,8 +113,8 @@ void ImpactRun::open_output()
           "path_velocity_m_s,contact_force_n,contacts,links_broken,spheres_removed,projectile_kinetic_j,"
           "target_kinetic_j,elastic_j,dissipated_j,removed_j,imbalance_j";
   if (_coupling)
-    _csv << ",shell_kinetic_j,shell_strain_j,multiplier_work_j,constraint_residual_m_s,shell_max_deflection_m,"
-            "support_reaction_n";
+    _csv << ",shell_kinetic_j,shell_strain_j,multiplier_work_j,constraint_residual_m_s,shell_max_deflection_m";
+  _csv << ",support_reaction_n";
   for (std::size_t q = 0; q < _s.shells.deflection_points.size(); ++q)
     _csv << ",deflection_" << q << "_m";
   _csv << '\n';
@@ -211,7 +211,8 @@ void ImpactRun::end_row(const ShellsEnergy& f)
 {
   if (_coupling)
     _csv << ',' << f.kinetic << ',' << f.strain << ',' << f.multiplier_work << ',' << _residual << ','
-         << _coupling->max_deflection() << ',' << _coupling->support_reaction();
+         << _coupling->max_deflection();
+  _csv << ',' << support_reaction();
   for (double w : point_deflections())
     _csv << ',' << w;
   _csv << '\n' << std::flush; // whole rows, as far as the frames, if the run is killed
@@ -230,7 +231,9 @@ void ImpactRun::print_header() const
             << " Pa, C0 " << m.cohesion << " Pa, rate effect " << (m.rate_fc > 0 ? fmt(m.rate_fc) + " Pa" : "off")
             << "\n# " << _p.size() << " spheres (" << fmt(_out["spheres_across_diameter"].get<double>(), 3)
             << " across the projectile), " << _links.size() << " links (lambda " << fmt(_lambda) << "), "
-            << _supported << " held\n";
+            << (_s.target.supports == "frame" ? "on a rigid frame " + fmt(_s.target.support_width) + " m wide"
+                                              : std::to_string(_supported) + " held")
+            << "\n";
   if (bars())
     std::cout << "# reinforcement: " << _out["reinforcement"]["bars"] << " bars of " << _s.reinforcement.bar_diameter
               << " m" << (_s.reinforcement.embedded ? " (embedded)" : "") << ", " << _out["reinforcement"]["elements"]
@@ -259,10 +262,13 @@ void ImpactRun::progress() const
       w = std::max(w, std::abs(x));
     if (_coupling)
       w = std::max(w, _coupling->max_deflection());
-    const double work = std::max(std::abs(_solver->energy().external_work), 1e-300);
+    // the share once the load has done some work: over its first steps the
+    // work is too small a scale (a twentieth of the pulse)
+    const double work = std::abs(_solver->energy().external_work);
+    const bool started = _solver->time() >= 0.05 * _s.pulse.duration && work > 0.0;
     std::cout << std::setw(14) << fmt(_solver->time()) << std::setw(11) << fmt(_s.pulse.force(_solver->time()), 3)
               << std::setw(13) << fmt(w, 3) << std::setw(8) << broken() << std::setw(16)
-              << fmt(imbalance() / work, 3) << std::endl;
+              << (started ? fmt(imbalance() / work, 3) : std::string("-")) << std::endl;
     return;
   }
   std::cout << std::setw(14) << fmt(_solver->time()) << std::setw(13) << fmt(path_velocity()) << std::setw(11)

@@ -97,6 +97,14 @@ private:
   std::vector<double> point_deflections() const;
   void set_up_solver();
   void set_up_supports();
+  /// target.supports = "frame": four fixed boxes under the rear face's
+  /// strip within support_width_m of the edges (reaching as far beyond
+  /// them), touched by the spheres through the body contact law,
+  /// frictionless; added after the projectile (body 0).
+  void add_frame();
+  /// The supports' force on the slab along z [N]: the held spheres'
+  /// reaction, the frame's contacts, or the coupled slab's shells'.
+  double support_reaction() const;
 
   /// With finer spheres along the path, the mean radius of those centred
   /// within target.fine_radius_m of it (none: nullopt, as without them).
@@ -172,6 +180,7 @@ private:
   double _dt = 0.0, _dt_crit = 0.0, _duration = 0.0, _crossing = 0.0;
   std::int64_t _nsteps = 0, _crossing_steps = 1, _history_every = 1;
   std::size_t _supported = 0;
+  std::vector<std::size_t> _frame; // the frame's bodies
   Bars _bars;
   bool _has_bars = false;
   std::size_t _bonds = 0, _spheres_on_bars = 0;

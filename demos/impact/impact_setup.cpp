@@ -215,6 +215,8 @@ void ImpactRun::set_up_solver()
     set_up_pulse();
   else
     _solver->add_body(_body);
+  if (!_coupling && _s.target.supports == "frame")
+    add_frame();
   if (!_coupling)
     locate_points();
   if (!_s.shells.deflection_points.empty())
@@ -289,7 +291,7 @@ std::vector<double> ImpactRun::point_deflections() const
 void ImpactRun::set_up_supports()
 {
   const TargetSpec& t = _s.target;
-  if (t.supports == "none")
+  if (t.supports == "none" || t.supports == "frame")
     return;
   const double w = t.support_width > 0.0 ? t.support_width : 2.0 * _rmax;
   const V3 lo = _lo, hi = _hi;
@@ -303,6 +305,42 @@ void ImpactRun::set_up_supports()
                             "target.supports = \"rear-edges\": the rear face's edge band (support_width_m)");
   _supported = ids.size();
   _solver->add_motion({"supports", std::move(ids), MotionKind::fixed, {true, true, true}, {}});
+}
+
+void ImpactRun::add_frame()
+{
+  const double w = _s.target.support_width, depth = _s.target.thickness;
+  const V3 lo = _lo, hi = _hi;
+  // the strips along x whole, those along y between them: no sphere is
+  // pressed by two boxes' faces at once
+  const std::array<std::array<V3, 2>, 4> boxes{{
+      {{{lo[0] - w, lo[1] - w, lo[2] - depth}, {hi[0] + w, lo[1] + w, lo[2]}}},
+      {{{lo[0] - w, hi[1] - w, lo[2] - depth}, {hi[0] + w, hi[1] + w, lo[2]}}},
+      {{{lo[0] - w, lo[1] + w, lo[2] - depth}, {lo[0] + w, hi[1] - w, lo[2]}}},
+      {{{hi[0] - w, lo[1] + w, lo[2] - depth}, {hi[0] + w, hi[1] - w, lo[2]}}},
+  }};
+  for (std::size_t k = 0; k < boxes.size(); ++k)
+  {
+    Shape box;
+    box.kind = Shape::Kind::box;
+    box.lo = boxes[k][0];
+    box.hi = boxes[k][1];
+    _frame.push_back(_solver->add_body(make_wall("frame " + std::to_string(k), box)));
+  }
+}
+
+double ImpactRun::support_reaction() const
+{
+  if (_coupling)
+    return _coupling->support_reaction();
+  if (!_frame.empty())
+  {
+    double r = 0.0;
+    for (auto k : _frame)
+      r -= _solver->body(k).f[2];
+    return r;
+  }
+  return _supported > 0 ? _solver->reaction("supports")[2] : 0.0;
 }
 
 std::optional<double> ImpactRun::fine_mean_radius() const

@@ -422,11 +422,12 @@ TargetSpec read_target(Reader& r)
   t.packing_file = r.text("packing_file", "", "",
                           "read the packing ('x y z r' [m], e.g. a run's packing.txt) instead of generating it, "
                           "relative to the scenario's folder; \"\" = generate");
-  t.supports = r.text("supports", t.supports, "sides | rear-edges | none",
+  t.supports = r.text("supports", t.supports, "sides | rear-edges | frame | none",
                       "sides: the spheres of the four lateral faces held; rear-edges: those of the rear face "
-                      "within support_width_m of its edges; none: free");
+                      "within support_width_m of its edges; frame: the slab rests on a rigid frame under that "
+                      "strip, free to lift off (docs/impact.md); none: free");
   t.support_width = r.number("support_width_m", t.support_width, Allowed::positive(10.0).or_value(0.0, "2 Rmax"),
-                             "width of the band held [m]");
+                             "width of the band held, or of the frame (needed with frame) [m]");
   t.fine_radius = r.number("fine_radius_m", t.fine_radius, Allowed::positive(100.0).or_value(0.0, "none"),
                            "finer spheres within this distance of the projectile's path, through the whole "
                            "thickness (docs/impact.md) [m]");
@@ -568,9 +569,9 @@ ShellSpec read_shells(Reader& r)
                                   "the shells' element size at the slab's corners, graded from element_size_m at the "
                                   "core [m]");
   s.cell = r.text("cell", s.cell, "quadrilateral | triangle", "the shells' elements");
-  s.edges = r.text("edges", s.edges, "\"\" | free | simply-supported | clamped",
-                   "the shells' outer edges; \"\" = as target.supports (sides: clamped, rear-edges: simply "
-                   "supported, none: free)");
+  s.edges = r.text("edges", s.edges, "\"\" | free | simply-supported | clamped | frame",
+                   "the shells' outer edges (frame: resting on target.supports' frame, free to lift off); \"\" = "
+                   "as target.supports (sides: clamped, rear-edges: simply supported, frame: frame, none: free)");
   s.weight_floor = r.number("weight_floor", s.weight_floor, Allowed::open(0.0, 1.0),
                             "floor of the weighted masses in the overlap [-]");
   s.deflection_points = r.points("deflection_points_m", "points (x, y) whose deflection (u_z; u_x under an "
@@ -597,6 +598,24 @@ PulseSpec read_pulse(Reader& r)
                        "-z: on the struck face, normal to it (bending); x: in the slab's plane, over the disc "
                        "through the whole thickness (membrane)");
   return p;
+}
+
+/// A frame needs its width, and leaves the slab's face room inside it.
+void check_frame(const Scenario& s)
+{
+  const TargetSpec& t = s.target;
+  const bool shells_frame = s.shells.edges == "frame" && s.shells.model != "de";
+  if (t.supports != "frame" && !shells_frame)
+    return;
+  const std::string at = "scenario " + s.file.string() + ": ";
+  const std::string who = t.supports == "frame" ? "target.supports = \"frame\"" : "shells.edges = \"frame\"";
+  if (!(t.support_width > 0.0))
+    throw std::runtime_error(at + who + " needs target.support_width_m > 0: the frame's width under the rear "
+                             "face's edges");
+  if (!(2.0 * t.support_width < std::min(t.size[0], t.size[1])))
+    throw std::runtime_error(at + "target.support_width_m = " + number_text(t.support_width) + " m: the frame "
+                             "must leave the slab's plan (target.size_m = [" + number_text(t.size[0]) + ", "
+                             + number_text(t.size[1]) + "] m) open inside it: below half the smaller size");
 }
 
 /// The pulse's own checks and what it asks of the run (a duration).
@@ -743,6 +762,7 @@ Scenario read_scenario(const std::filesystem::path& file, const std::vector<std:
                              "diameter (> 0 m) with layers or bars_m");
   bar_lines(s); // the layout's own checks
   check_pulse(s);
+  check_frame(s);
   const auto& pts = s.shells.deflection_points;
   for (std::size_t q = 0; q < pts.size(); ++q)
     if (std::abs(pts[q][0]) > 0.5 * s.target.size[0] || std::abs(pts[q][1]) > 0.5 * s.target.size[1])

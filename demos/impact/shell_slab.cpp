@@ -66,6 +66,7 @@ private:
     _fe = std::make_unique<shell::FEModel>(shell::mesh_outline(MPI_COMM_WORLD, o, _spec.cell, pl), shell_material(_s));
     if (_s.reinforcement.layers > 0)
       _fe->set_reinforcement(shell_steel(_s, _fe->nodal_normals()[2] >= 0.0 ? 1.0 : -1.0));
+    _frame_nodes = bridge::slab_frame_springs(*_fe, _spec, _fe->material().youngs_modulus); // the step counts them
     const auto mass = _fe->lumped_mass();
     _dt_crit = _fe->critical_time_step(mass);
     const RunSpec& run = _s.run;
@@ -117,11 +118,14 @@ private:
   std::vector<double> point_deflections() const { return _points->deflections(_solver->u()); }
 
   double max_deflection() const { return demo::max_deflection(*_fe, _solver->u()); }
-  double support_reaction() const { return z_reaction(*_fe, _solver->reactions()); }
+  double support_reaction() const
+  {
+    return z_reaction(*_fe, _solver->reactions()) + _fe->support_spring_force(_solver->u());
+  }
 
   void describe()
   {
-    const char* edges[] = {"free", "simply-supported", "clamped"};
+    const char* edges[] = {"free", "simply-supported", "clamped", "frame"};
     _out["scenario"] = _s.name;
     _out["model"] = _s.shells.model;
     _out["shells"] = {{"element_size_m", _spec.element_size},
@@ -131,6 +135,7 @@ private:
                       {"shell_nodes", _fe->num_nodes()},
                       {"shell_cells", _fe->num_cells()},
                       {"supported_shell_dofs", _supports.size()},
+            {"frame_nodes", _frame_nodes},
                       {"shell_setup_s", _setup_s}};
     _out["pulse"] = {{"peak_force_n", _s.pulse.peak_force},
                      {"duration_s", _s.pulse.duration},
@@ -259,6 +264,7 @@ private:
   std::unique_ptr<shell::XdmfWriter> _writer;
   std::unique_ptr<DeflectionTrack> _track;
   std::vector<std::int32_t> _supports;
+  std::size_t _frame_nodes = 0; // shell nodes on the frame (Edges::frame)
   std::unique_ptr<ShellPoints> _points; // shells.deflection_points_m
   std::size_t _load_nodes = 0;
   std::ofstream _csv;

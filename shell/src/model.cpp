@@ -247,6 +247,20 @@ struct FEModel::Impl
   int npc = 0;
   std::vector<std::int32_t> v_to_w;  // node -> W dof
   std::vector<double> normals, weight;
+  std::vector<std::int32_t> spring_dofs; // set_support_springs
+  std::vector<double> spring_k;
+
+  /// f = K u (the form) plus the springs: compression-only, or two-sided
+  /// for the step's bound.
+  void force_with_springs(std::span<const double> u, std::span<double> f, bool two_sided) const
+  {
+    force->apply(u, f);
+    for (std::size_t q = 0; q < spring_dofs.size(); ++q)
+    {
+      const double uq = u[spring_dofs[q]];
+      f[spring_dofs[q]] += spring_k[q] * (two_sided ? uq : std::min(uq, 0.0));
+    }
+  }
 };
 
 FEModel::FEModel(std::shared_ptr<dolfinx::mesh::Mesh> mesh, const Material& material,
@@ -539,22 +553,57 @@ void FEModel::set_reinforcement(const Reinforcement& r, std::span<const std::int
   I.force->update();
 }
 
+void FEModel::set_support_springs(std::vector<std::int32_t> dofs, std::vector<double> k)
+{
+  if (dofs.size() != k.size())
+    throw std::runtime_error("support springs: " + std::to_string(dofs.size()) + " dofs but "
+                             + std::to_string(k.size()) + " stiffnesses");
+  for (std::size_t q = 0; q < dofs.size(); ++q)
+  {
+    if (dofs[q] < 0 || static_cast<std::size_t>(dofs[q]) >= num_dofs())
+      throw std::runtime_error("support springs: dof " + std::to_string(dofs[q]) + " outside [0, "
+                               + std::to_string(num_dofs()) + ")");
+    if (!(k[q] > 0.0) || !std::isfinite(k[q]))
+      throw std::runtime_error("support springs: stiffness " + std::to_string(k[q]) + " N/m of dof "
+                               + std::to_string(dofs[q]) + ": must be > 0");
+  }
+  _impl->spring_dofs = std::move(dofs);
+  _impl->spring_k = std::move(k);
+}
+
+std::span<const std::int32_t> FEModel::support_spring_dofs() const { return _impl->spring_dofs; }
+
+double FEModel::support_spring_force(std::span<const double> u) const
+{
+  const auto& I = *_impl;
+  double f = 0.0;
+  for (std::size_t q = 0; q < I.spring_dofs.size(); ++q)
+    f -= I.spring_k[q] * std::min(u[I.spring_dofs[q]], 0.0);
+  return f;
+}
+
 void FEModel::internal_force(std::span<const double> u, std::span<double> f) const
 {
-  _impl->force->apply(u, f);
+  _impl->force_with_springs(u, f, false);
 }
 
 InternalForceFn FEModel::internal_force_fn() const
 {
-  InternalForce* force = _impl->force.get();
-  return [force](std::span<const double> u, std::span<double> f) { force->apply(u, f); };
+  const Impl* I = _impl.get();
+  return [I](std::span<const double> u, std::span<double> f) { I->force_with_springs(u, f, false); };
+}
+
+InternalForceFn FEModel::bounding_force_fn() const
+{
+  const Impl* I = _impl.get();
+  return [I](std::span<const double> u, std::span<double> f) { I->force_with_springs(u, f, true); };
 }
 
 double FEModel::critical_time_step(std::span<const double> mass) const
 {
   if (mass.size() != num_dofs())
     throw std::runtime_error("critical_time_step: mass size differs from the dofs");
-  const double lmax = core::max_eigenvalue(mass, internal_force_fn());
+  const double lmax = core::max_eigenvalue(mass, bounding_force_fn());
   return 2.0 / std::sqrt(lmax);
 }
 

@@ -33,7 +33,8 @@ struct SlabSpec
   {
     free,
     simply_supported, ///< the edge nodes' translations held
-    clamped           ///< the edge nodes' translations and rotations held
+    clamped,          ///< the edge nodes' translations and rotations held
+    frame             ///< resting on a rigid frame under the rear face (slab_frame_springs)
   };
   std::array<double, 2> size{0.0, 0.0}; ///< the slab's plan [m]
   double thickness = 0.0;               ///< [m]
@@ -46,6 +47,7 @@ struct SlabSpec
   double outer_element_size = 0.0;           ///< at the slab's corners, graded from element_size [m]; 0 = uniform
   shell::Cell cell = shell::Cell::quadrilateral;
   Edges edges = Edges::simply_supported;
+  double frame_width = 0.0; ///< Edges::frame: the frame's width, inwards from the plan's edges [m]
   /// @throws std::runtime_error naming the value: sizes not > 0, a core
   ///   whose band does not lie strictly inside the slab, elements larger
   ///   than the band (the band must hold shell nodes across it).
@@ -65,5 +67,13 @@ std::shared_ptr<dolfinx::mesh::Mesh> slab_shells(MPI_Comm comm, const SlabSpec& 
 /// outer boundary, their translations (simply supported) or all six
 /// (clamped).
 std::vector<std::int32_t> slab_support_dofs(const shell::FEModel& fe, const SlabSpec& s);
+/// Edges::frame: the slab rests on a rigid frame, the strip of the rear face
+/// within frame_width of the plan's edges. Each shell node over the strip
+/// gets a compression-only spring on u_z (FEModel::set_support_springs) of
+/// stiffness E A / (thickness / 2), A its tributary area: the concrete
+/// between the mid-surface and the rear face, in compression, carries the
+/// bearing. Sets them on fe and returns how many; none for other edges.
+/// @throws std::runtime_error if no node lies over the strip.
+std::size_t slab_frame_springs(shell::FEModel& fe, const SlabSpec& s, double youngs_modulus);
 
 } // namespace dembridge::bridge

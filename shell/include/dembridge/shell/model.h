@@ -156,12 +156,29 @@ public:
   void set_weight(std::span<const double> eta);
   std::span<const double> weight() const;
 
-  /// f = f_int(u) [N, N m].
+  /// Compression-only springs: a rigid support the shell rests on (a frame
+  /// under a slab's edges). Spring q acts on dof dofs[q] with the force
+  /// -k[q] min(u, 0): it resists the dof's moving below 0 and lets it move
+  /// away freely. Its energy, k min(u, 0)^2 / 2, is u f / 2, so a strain
+  /// energy taken as u . f_int / 2 stays exact. Replaces those set before.
+  /// solve_static and lowest_mode leave them out (the sections alone).
+  /// @throws std::runtime_error for sizes that differ, a dof out of range
+  ///   or a stiffness not > 0.
+  void set_support_springs(std::vector<std::int32_t> dofs, std::vector<double> k);
+  std::span<const std::int32_t> support_spring_dofs() const;
+  /// The springs' force on the shell at u, summed over them (> 0 pushes the
+  /// dofs' positive way) [N].
+  double support_spring_force(std::span<const double> u) const;
+
+  /// f = f_int(u) [N, N m]: the sections' forces and the support springs'.
   void internal_force(std::span<const double> u, std::span<double> f) const;
   InternalForceFn internal_force_fn() const;
+  /// The linear force whose largest eigenvalue bounds the step: as
+  /// internal_force_fn(), the support springs two-sided.
+  InternalForceFn bounding_force_fn() const;
 
   /// Critical time step 2 / sqrt(lambda_max(M^-1 K)) for the given lumped
-  /// mass (power iteration) [s].
+  /// mass (power iteration; support springs counted two-sided) [s].
   double critical_time_step(std::span<const double> mass) const;
 
   /// Tributary weights of the given boundary nodes for a load spread
