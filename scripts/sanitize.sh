@@ -13,7 +13,7 @@ sh scripts/install-deps.sh
 # the tests and the demos' cases at -O0 (DEMBRIDGE_MODULE_FLAGS): instrumented,
 # -O2 doubles a translation unit's compile time, and the modules' kernels run
 # about 1.7 times faster than at -O1
-flags="-O0 -g1 -fsanitize=address,undefined -fno-omit-frame-pointer"
+flags="-O0 -g1 -fsanitize=address,undefined -fno-sanitize=vptr,alignment,null -fno-omit-frame-pointer"
 # leaks off: MPI and PETSc keep allocations until exit by design
 export ASAN_OPTIONS=detect_leaks=0:halt_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
