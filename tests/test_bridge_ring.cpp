@@ -405,10 +405,9 @@ TEST_CASE("ring overlap round a cylinder core, shells meshed by Gmsh: a uniform 
 
 namespace
 {
-constexpr double pi = std::numbers::pi;
 
 /// The first mode's shape of the simply supported square plate, sin sin.
-double mode(const double* x) { return std::sin(pi * x[0] / side) * std::sin(pi * x[1] / side); }
+double mode(const double* x) { return std::sin(std::numbers::pi * x[0] / side) * std::sin(std::numbers::pi * x[1] / side); }
 
 /// The translations of the nodes on the plate's outer edges (simply supported, held in plane).
 std::vector<std::int32_t> edge_dofs(const shell::FEModel& fe)
@@ -532,7 +531,7 @@ TEST_CASE("ring overlap: an elastic plate's first mode, coupled against all shel
 {
   // A simply supported square plate (0.16 m, 20 mm thick, the default
   // concrete's E 30 GPa, nu 0.2, 2400 kg/m^3) starts with the velocity of
-  // its first mode, sin(pi x / a) sin(pi y / a) x 0.1 m/s: all shells; all
+  // its first mode, sin(std::numbers::pi x / a) sin(std::numbers::pi y / a) x 0.1 m/s: all shells; all
   // DE (2.5 mm spheres); and shells round a DE core (the ring set-up
   // above). The coupled plate's period and peak deflection at the centre
   // must agree with each of the others within 2 % and 5 % (the issue's

@@ -109,7 +109,7 @@ private:
   std::vector<std::string>* _log;
 };
 
-Material concrete()
+Material addon_concrete()
 {
   Material m;
   m.micro = {0.2, 1.0, 1.0};
@@ -122,7 +122,7 @@ constexpr double tether_mass = 2e-5;
 struct TwoBody
 {
   Particles p = make_particles(std::vector<double>{0, 0, 0}, std::vector<double>{1e-3}, 2400.0, 1.0);
-  Material mat = concrete();
+  Material mat = addon_concrete();
   Links l;
   std::unique_ptr<DemSolver> s;
   Tether* tether = nullptr;
@@ -227,7 +227,7 @@ TEST_CASE("add-on: restart bit for bit; other add-ons or late ones refused", "[d
                     Contains("'tether'") && Contains("before start()"));
   Particles p = make_particles(std::vector<double>{0, 0, 0}, std::vector<double>{1e-3}, 2400.0, 1.0);
   Links l;
-  DemSolver s(p, l, concrete(), 1e-7, 0.0, 0.2e-3);
+  DemSolver s(p, l, addon_concrete(), 1e-7, 0.0, 0.2e-3);
   s.add_addon(std::make_unique<Tether>(1.0, 1.0, V3{0, 0, 0}));
   CHECK_THROWS_WITH(s.add_addon(std::make_unique<Tether>(1.0, 1.0, V3{0, 0, 0})), Contains("name is in use"));
   CHECK_THROWS_WITH(s.bar_reaction(0), Contains("bar node group 0"));

@@ -23,7 +23,6 @@ using Catch::Matchers::WithinRel;
 
 namespace
 {
-constexpr double pi = std::numbers::pi;
 
 Steel b500()
 {
@@ -177,7 +176,7 @@ TEST_CASE("a bar pulled to rupture: yield force, hardening and rupture against t
   // the end force is A sigma(u / L) within 1 % (the impulsive start's ring,
   // rho c v = 2 MPa, damped), and zero once an element reached eps_u
   const Steel s = b500();
-  const double d = 5.69e-3, A = pi * d * d / 4, L = 0.1;
+  const double d = 5.69e-3, A = std::numbers::pi * d * d / 4, L = 0.1;
   const std::vector<double> strains{0.5 * s.yield / s.youngs_modulus, 0.004, 0.02, 0.045, 0.051};
   std::vector<double> at;
   for (double e : strains)
@@ -203,7 +202,7 @@ TEST_CASE("bar objectivity: the axial stiffness does not depend on the elements"
   // elements give the same elastic force at the same end displacement, to
   // 0.5 % (the issue's bound is 2 %; the ring's remains are smaller)
   const Steel s = b500();
-  const double d = 5.69e-3, A = pi * d * d / 4, L = 0.1, u = 0.001 * L;
+  const double d = 5.69e-3, A = std::numbers::pi * d * d / 4, L = 0.1, u = 0.001 * L;
   for (int n : {1, 4, 16})
   {
     const auto f = pull(straight_bar(L, n, d, s), 0.01, {u});
@@ -221,7 +220,7 @@ TEST_CASE("bar bending: a simply supported bar against beam theory", "[bars][lon
   // error of the central differences): 12.5 % at 4 elements, 0.8 % at 16.
   // Within 2 % from 10 elements per span (the issue's bound).
   const Steel s = b500();
-  const double d = 5.69e-3, L = 0.2, EI = s.youngs_modulus * pi * std::pow(d, 4) / 64;
+  const double d = 5.69e-3, L = 0.2, EI = s.youngs_modulus * std::numbers::pi * std::pow(d, 4) / 64;
   for (int n : {4, 16, 32})
   {
     Bystander b;
@@ -417,7 +416,7 @@ TEST_CASE("pull-out of a bar from a DE cylinder follows the bond law", "[bars][p
   // 50 mm, pulled out through the bottom face, whose 5 mm layer of spheres
   // is held (the bearing plate of a pull-out test). The concrete is kept
   // elastic (strengths raised) so that the bond alone yields. The mean bond
-  // stress F / (pi d L) against the slip of the loaded end follows the
+  // stress F / (std::numbers::pi d L) against the slip of the loaded end follows the
   // given curve to within the packing's scatter: the bonded surface is the
   // bar's exactly (shares per element), but the concrete's and bar's
   // elastic strains add up to 0.05 mm to the end's slip: on the rising
@@ -454,7 +453,7 @@ TEST_CASE("pull-out of a bar from a DE cylinder follows the bond law", "[bars][p
   double surface = 0.0;
   for (double s : bars.surface)
     surface += s;
-  CHECK_THAT(surface, WithinRel(pi * d * H, 1e-9));
+  CHECK_THAT(surface, WithinRel(std::numbers::pi * d * H, 1e-9));
   const double dt = 0.5 * critical_time_step(p, l, m, bars);
   DemSolver s(p, l, m, dt, 2000.0, 0.5e-3);
   ParticleMotion held;
@@ -479,7 +478,7 @@ TEST_CASE("pull-out of a bar from a DE cylinder follows the bond law", "[bars][p
     while (s.bars().x0[3 * face + 2] - s.bars().x[3 * face + 2] < target)
       s.step();
     const double slip = s.bars().x0[3 * face + 2] - s.bars().x[3 * face + 2];
-    const double tau = s.bar_reaction(pulled)[2] / -(pi * d * H);
+    const double tau = s.bar_reaction(pulled)[2] / -(std::numbers::pi * d * H);
     const double ref = bond_envelope(slip, bl);
     worst = std::max(worst, std::abs(tau / ref - 1.0));
     INFO("slip " << slip * 1e3 << " mm: mean bond stress " << tau / 1e6 << " MPa, curve " << ref / 1e6 << " MPa");

@@ -19,7 +19,6 @@ using V3 = std::array<double, 3>;
 
 namespace
 {
-constexpr double pi = std::numbers::pi;
 
 Shape projectile(Nose nose, double d = 0.0254, double length = 0.12)
 {
@@ -31,7 +30,7 @@ Shape projectile(Nose nose, double d = 0.0254, double length = 0.12)
   return s;
 }
 
-Material concrete()
+Material body_concrete()
 {
   Material m;
   m.micro = {0.2, 1.0, 1.0};
@@ -59,7 +58,7 @@ Shape floor_plane()
 /// Period of a sphere's normal contact with a body [s].
 double contact_period(const Particles& p, const Material& m)
 {
-  return 2 * pi * std::sqrt(p.m[0] / body_contact_stiffness(m, p.r[0]));
+  return 2 * std::numbers::pi * std::sqrt(p.m[0] / body_contact_stiffness(m, p.r[0]));
 }
 
 /// n^3 spheres on a jittered cubic lattice of spacing 2 mm, radii 0.95 mm.
@@ -113,9 +112,9 @@ TEST_CASE("body shapes: signed distances of the noses against closed form", "[de
     Shape s = projectile(Nose::conical);
     s.cone_angle_deg = 30.0;
     const double Ln = s.nose_length(), a = -0.5 * Ln, r = R * 0.5; // half-way along the side
-    const double na = std::sin(pi / 6), nr = std::cos(pi / 6);
+    const double na = std::sin(std::numbers::pi / 6), nr = std::cos(std::numbers::pi / 6);
     check(s, {a, 0.0, r}, {na, 0.0, nr}, "cone side");
-    CHECK_THAT(Ln, WithinRel(R / std::tan(pi / 6), 1e-14));
+    CHECK_THAT(Ln, WithinRel(R / std::tan(std::numbers::pi / 6), 1e-14));
   }
   // tangent ogive CRH 3: arc radius s = 3 d centred at (-L, -(s - R)), L = d sqrt(psi - 1/4)
   {
@@ -162,25 +161,25 @@ TEST_CASE("body mass properties against closed form", "[dem][body]")
   // flat: a cylinder, I_axis = m R^2 / 2, I_transverse = m (3 R^2 + len^2) / 12
   {
     const RigidBody b = make_projectile("p", projectile(Nose::flat), rho, {0, 0, 0}, {1, 0, 0}, {0, 0, 0});
-    const double m = rho * pi * R * R * len;
+    const double m = rho * std::numbers::pi * R * R * len;
     CHECK_THAT(b.mass, WithinRel(m, 1e-12));
     CHECK_THAT(b.centre[0], WithinRel(-0.5 * len, 1e-12));
     CHECK_THAT(b.inertia[0], WithinRel(0.5 * m * R * R, 1e-12));
     CHECK_THAT(b.inertia[1], WithinRel(m * (3 * R * R + len * len) / 12.0, 1e-12));
   }
-  // hemispherical and conical noses: volumes pi R^2 (len - Ln) + 2/3 pi R^3, + pi R^2 Ln / 3
-  CHECK_THAT(projectile(Nose::hemispherical).volume(), WithinRel(pi * R * R * (len - R) + 2.0 / 3.0 * pi * R * R * R, 1e-12));
+  // hemispherical and conical noses: volumes std::numbers::pi R^2 (len - Ln) + 2/3 std::numbers::pi R^3, + std::numbers::pi R^2 Ln / 3
+  CHECK_THAT(projectile(Nose::hemispherical).volume(), WithinRel(std::numbers::pi * R * R * (len - R) + 2.0 / 3.0 * std::numbers::pi * R * R * R, 1e-12));
   {
     const Shape s = projectile(Nose::conical);
-    CHECK_THAT(s.volume(), WithinRel(pi * R * R * (len - s.nose_length()) + pi * R * R * s.nose_length() / 3.0, 1e-12));
+    CHECK_THAT(s.volume(), WithinRel(std::numbers::pi * R * R * (len - s.nose_length()) + std::numbers::pi * R * R * s.nose_length() / 3.0, 1e-12));
   }
-  // ogive: the nose int_0^L pi r^2 = pi (s^2 L - L^3 / 3 - c s^2 asin(L / s)), c = s - R
+  // ogive: the nose int_0^L std::numbers::pi r^2 = std::numbers::pi (s^2 L - L^3 / 3 - c s^2 asin(L / s)), c = s - R
   {
     const Shape sh = projectile(Nose::ogive);
     const double s = 3.0 * d, L = sh.nose_length(), c = s - R;
-    const double nose = pi * (s * s * L - L * L * L / 3.0 - c * s * s * std::asin(L / s));
+    const double nose = std::numbers::pi * (s * s * L - L * L * L / 3.0 - c * s * s * std::asin(L / s));
     // Simpson on a smooth r^2 with 4000 intervals: 1e-10
-    CHECK_THAT(sh.volume(), WithinRel(pi * R * R * (len - L) + nose, 1e-10));
+    CHECK_THAT(sh.volume(), WithinRel(std::numbers::pi * R * R * (len - L) + nose, 1e-10));
   }
 }
 
@@ -191,7 +190,7 @@ TEST_CASE("rigid body in free flight: translation and spin exact", "[dem][body]"
   // alone), and keeps its angular momentum exactly.
   Particles p = one_sphere({10.0, 10.0, 10.0}, 1e-3, {0, 0, 0});
   Links l;
-  const Material m = concrete();
+  const Material m = body_concrete();
   DemSolver s(p, l, m, 1e-6, 0.0, 1e-4);
   RigidBody b = make_projectile("p", projectile(Nose::ogive), 7850.0, {0, 0, 0}, {1, 0, 0}, {300.0, 5.0, -2.0});
   const double spin = 2000.0; // rad/s about the axis
@@ -234,7 +233,7 @@ TEST_CASE("rigid body in free flight: a tilted spin precesses about the angular 
   // precession is within (|L| dt / I_t)-order of the closed form: 1e-4.
   Particles p = one_sphere({10.0, 10.0, 10.0}, 1e-3, {0, 0, 0});
   Links l;
-  DemSolver s(p, l, concrete(), 1e-6, 0.0, 1e-4);
+  DemSolver s(p, l, body_concrete(), 1e-6, 0.0, 1e-4);
   RigidBody b = make_projectile("p", projectile(Nose::ogive), 7850.0, {0, 0, 0}, {1, 0, 0}, {0, 0, 0});
   b.L = {b.inertia[1] * 50.0, b.inertia[1] * 30.0, 0.0}; // 30 degrees off the axis
   s.add_body(b);
@@ -268,8 +267,8 @@ TEST_CASE("spheres resting on planes: every one that overlaps a plane is in cont
   // test of every sphere finds (the candidates come from the neighbour
   // list's cells, a plane's unbounded box clamped to the grid).
   Particles p = lattice(6, {0.0, 0.0, 0.95e-3 - 5e-5});
-  Links l = create_links(p, 1.2, concrete());
-  DemSolver s(p, l, concrete(), 1e-8, 0.0, 0.2e-3);
+  Links l = create_links(p, 1.2, body_concrete());
+  DemSolver s(p, l, body_concrete(), 1e-8, 0.0, 0.2e-3);
   const Shape floor = floor_plane();
   Shape slope;
   slope.kind = Shape::Kind::plane;
@@ -298,7 +297,7 @@ TEST_CASE("a sphere bouncing on a fixed plane keeps its speed", "[dem][body]")
   const double r = 1e-3, v0 = 2.0;
   Particles p = one_sphere({0.0, 0.0, 1.5e-3}, r, {0.0, 0.0, -v0});
   Links l;
-  const Material m = concrete();
+  const Material m = body_concrete();
   DemSolver s(p, l, m, contact_period(p, m) / 50.0, 0.0, 1e-4);
   s.add_body(make_wall("floor", floor_plane()));
   s.start();
@@ -320,7 +319,7 @@ TEST_CASE("critical time step with body contacts: below the contact's own bound"
   const double r = 1e-3, v0 = 1.0;
   Particles p = one_sphere({0.0, 0.0, 1.05e-3}, r, {0.0, 0.0, -v0});
   Links l;
-  const Material m = concrete();
+  const Material m = body_concrete();
   const double dt = critical_time_step(p, l, m), own = 2.0 * std::sqrt(p.m[0] / body_contact_stiffness(m, r));
   INFO("bound " << dt << " s, normal contact alone " << own << " s");
   CHECK(dt < own);
@@ -345,7 +344,7 @@ TEST_CASE("oblique impact with friction: the sliding outcome of impulse theory",
   const double r = 1e-3, vn = 1.0, vt = 3.0, mu = 0.1;
   Particles p = one_sphere({0.0, 0.0, 1.2e-3}, r, {vt, 0.0, -vn});
   Links l;
-  const Material m = concrete();
+  const Material m = body_concrete();
   DemSolver s(p, l, m, contact_period(p, m) / 100.0, 0.0, 1e-4);
   s.add_body(make_wall("floor", floor_plane(), mu));
   s.start();
@@ -372,7 +371,7 @@ TEST_CASE("a contact off the body's axis: force and torque on the body", "[dem][
   const double r = 1e-3, delta = 1e-5, y0 = 5e-3;
   Particles p = one_sphere({r - delta, y0, 0.0}, r, {0, 0, 0});
   Links l;
-  const Material m = concrete();
+  const Material m = body_concrete();
   DemSolver s(p, l, m, 1e-8, 0.0, 1e-4);
   s.add_motion({"held", {0}, MotionKind::fixed, {true, true, true}, {}});
   s.add_body(make_projectile("p", projectile(Nose::flat), 7850.0, {0, 0, 0}, {1, 0, 0}, {0, 0, 0}));
@@ -396,7 +395,7 @@ TEST_CASE("projectile into a free bonded block: momentum kept, energy budget clo
   // contact energy and friction included) closes to the integration's
   // O((omega dt)^2) of the energy exchanged (within 1e-3 of the initial).
   Particles p = lattice(8, {0.0, -7e-3, -7e-3});
-  Material m = concrete();
+  Material m = body_concrete();
   m.tensile = 1e12;
   m.cohesion = 1e12; // elastic links: no breakage, the budget's terms here are the contacts'
   Links l = create_links(p, 1.2, m);
@@ -469,7 +468,7 @@ TEST_CASE("restart with a rigid body: bit for bit", "[dem][body][restart]")
   struct Run
   {
     Particles p = lattice(6, {0.0, -5e-3, -5e-3});
-    Material m = concrete();
+    Material m = body_concrete();
     Links l;
     std::unique_ptr<DemSolver> s;
     Run()
@@ -537,7 +536,7 @@ TEST_CASE("rigid bodies: bad shapes and bodies are refused, naming the value", "
                     Contains("density -1"));
   Particles p = one_sphere({0, 0, 0}, 1e-3, {0, 0, 0});
   Links l;
-  DemSolver solver(p, l, concrete(), 1e-7, 0.0, 1e-4);
+  DemSolver solver(p, l, body_concrete(), 1e-7, 0.0, 1e-4);
   RigidBody b = make_projectile("p", projectile(Nose::flat), 7850.0, {1, 0, 0}, {1, 0, 0}, {0, 0, 0});
   solver.add_body(b);
   CHECK_THROWS_WITH(solver.add_body(b), Contains("'p': the name is in use"));
@@ -557,7 +556,7 @@ TEST_CASE("fragments: spheres leaving the domain are removed and booked", "[dem]
   // neighbour grid stays within the domain (the removed spheres do not
   // stretch it, as they do without a domain).
   Particles p = lattice(6, {0.0, -5e-3, -5e-3});
-  Material m = concrete();
+  Material m = body_concrete();
   m.tensile = 0.3e6;
   m.cohesion = 0.5e6; // weak: the block breaks up
   Links l = create_links(p, 1.2, m);
@@ -646,7 +645,7 @@ TEST_CASE("fragments: a sphere pushed out of the domain by a body takes its cont
   const double r = 1e-3;
   Particles p = one_sphere({r - 1e-5, 0.0, 0.0}, r, {0, 0, 0});
   Links l;
-  const Material m = concrete();
+  const Material m = body_concrete();
   DemSolver s(p, l, m, contact_period(p, m) / 100.0, 0.0, 1e-4);
   s.set_domain({-1.0, -1.0, -1.0}, {r + 2e-6, 1.0, 1.0});
   s.add_body(make_projectile("p", projectile(Nose::flat), 7850.0, {0, 0, 0}, {1, 0, 0}, {5.0, 0, 0}));
@@ -681,7 +680,7 @@ TEST_CASE("fragments: a removal leaves the conditions' reactions and work alone"
   p.v[0] = 1.0; // already at its set velocity: no impulse at the start
   p.v[3] = 50.0;
   Links l;
-  DemSolver s(p, l, concrete(), 1e-6, 0.0, 1e-4);
+  DemSolver s(p, l, body_concrete(), 1e-6, 0.0, 1e-4);
   s.set_domain({-1.0, -1.0, -1.0}, {0.1 + 1e-3, 1.0, 1.0});
   s.add_motion({"a", {0}, MotionKind::velocity, {true, false, false}, [](double) { return 1.0; }});
   s.start();

@@ -15,7 +15,7 @@ using Catch::Matchers::WithinRel;
 
 namespace
 {
-double norm(const Vec3& a) { return std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
+double length_of(const Vec3& a) { return std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
 Mat3 minus_identity(const Vec3& th) { return rotation_minus_identity(step_rotation(th)); }
 
 /// Spheres of radii 0.8-1 mm on a jittered lattice of spacing 1.7 mm: they
@@ -40,7 +40,7 @@ TEST_CASE("rolling law: the moment turns with the pair and resists the relative 
   // a rigid rotation of the pair and both spheres (0.3 rad about an oblique
   // axis): no relative rotation, the moment turns with them (round-off)
   const Vec3 axis{0.3, -0.5, 0.8};
-  const double an = norm(axis);
+  const double an = length_of(axis);
   const Vec3 th{0.3 * axis[0] / an, 0.3 * axis[1] / an, 0.3 * axis[2] / an};
   const Vec3 n1 = rotate(th, n0), expect = rotate(th, m0);
   const Vec3 turned = trial_rolling(m0, n1, minus_identity(th), step_rotation(th), 0.4, {0, 0, 0}, kr);
@@ -66,7 +66,7 @@ TEST_CASE("rolling law: the cap mu_r R* F_c and the energy it dissipates", "[dem
   // over the increment less the spring's gain, as for sliding)
   const ShearForce a = contact_rolling_cap({0, 2 * cap, 0}, fn, kr, arm, {0, 0, 0});
   CHECK(a.exceeded);
-  CHECK_THAT(norm(a.fs), WithinRel(cap, 1e-14));
+  CHECK_THAT(length_of(a.fs), WithinRel(cap, 1e-14));
   CHECK_THAT(a.slip_energy, WithinRel(0.5 * cap * cap / kr, 1e-12));
   // rolling on at the cap: cap x rotation
   const ShearForce b = contact_rolling_cap({0, 1.3 * cap, 0}, fn, kr, arm, a.fs);
@@ -76,7 +76,7 @@ TEST_CASE("rolling law: the cap mu_r R* F_c and the energy it dissipates", "[dem
   CHECK(!c.exceeded);
   CHECK(c.slip_energy == 0.0);
   // no compression, no moment
-  CHECK(norm(contact_rolling_cap({1e-4, 0, 0}, 0.0, kr, arm, {0, 0, 0}).fs) == 0.0);
+  CHECK(length_of(contact_rolling_cap({1e-4, 0, 0}, 0.0, kr, arm, {0, 0, 0}).fs) == 0.0);
 }
 
 TEST_CASE("rolling resistance: the moments of touching spheres are equal and opposite", "[dem][rolling]")
@@ -98,7 +98,7 @@ TEST_CASE("rolling resistance: the moments of touching spheres are equal and opp
     compute_forces(p, l, nl, m, 1e-7, c);
   double tmax = 0.0, mmax = 0.0;
   for (std::size_t q = 0; q < nl.size(); ++q)
-    mmax = std::max(mmax, norm({nl.mr[3 * q], nl.mr[3 * q + 1], nl.mr[3 * q + 2]}));
+    mmax = std::max(mmax, length_of({nl.mr[3 * q], nl.mr[3 * q + 1], nl.mr[3 * q + 2]}));
   for (double t : p.t)
     tmax = std::max(tmax, std::abs(t));
   REQUIRE(mmax > 0.0);

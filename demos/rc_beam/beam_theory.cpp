@@ -11,11 +11,10 @@
 
 namespace dembridge::demo
 {
-constexpr double pi = std::numbers::pi;
 
 namespace
 {
-double steel_area(const BeamConfig& c) { return c.bars * pi * c.bar_diameter * c.bar_diameter / 4.0; }
+double steel_area(const BeamConfig& c) { return c.bars * std::numbers::pi * c.bar_diameter * c.bar_diameter / 4.0; }
 } // namespace
 
 BeamTheory beam_theory(const BeamConfig& c)
