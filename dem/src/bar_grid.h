@@ -15,6 +15,9 @@
 
 namespace dembridge::dem::impl
 {
+/// a . b of two 3-vectors
+inline double dot(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
 /// The bars' elements by cells of a uniform grid: each element listed in
 /// every cell its box, grown by `reach`, touches; a query looks in its own
 /// cell only, and finds every element within `reach` of it (a point

@@ -17,11 +17,7 @@
 
 namespace dembridge::dem
 {
-using namespace impl; // the bars' element grid (bar_grid.h) and errors.h
-namespace
-{
-double dot(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-} // namespace
+using namespace impl; // the bars' element grid (bar_grid.h), dot and errors.h
 
 std::array<double, 2> distance_to_element(const Bars& bars, std::size_t e, const double* x)
 {

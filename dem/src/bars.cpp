@@ -22,8 +22,8 @@ using impl::nearest_element;
 namespace
 {
 bool finite_positive(double v) { return v > 0.0 && std::isfinite(v); }
-double dot(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 } // namespace
+using impl::dot;
 
 void Steel::validate() const
 {
