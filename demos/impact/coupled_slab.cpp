@@ -177,7 +177,7 @@ public:
   double max_deflection() const override { return demo::max_deflection(*_fe, _cs->fe().u()); }
   double support_reaction() const override
   {
-    return z_reaction(*_fe, _cs->fe().reactions()) + _fe->support_spring_force(_cs->fe().u());
+    return demo::support_reaction(*_fe, _cs->fe().reactions(), _cs->fe().u());
   }
 
   std::vector<double> point_deflections() const override { return _points->deflections(_cs->fe().u()); }
@@ -407,9 +407,9 @@ double max_deflection(const shell::FEModel& fe, std::span<const double> u)
   return w;
 }
 
-double z_reaction(const shell::FEModel& fe, std::span<const double> r)
+double support_reaction(const shell::FEModel& fe, std::span<const double> r, std::span<const double> u)
 {
-  double f = 0.0;
+  double f = fe.support_spring_force(u);
   for (std::size_t k = 0; k < fe.num_nodes(); ++k)
     f += r[fe.block_size() * k + 2];
   return f;

@@ -51,10 +51,11 @@ private:
   int _component = 2;
 };
 
-/// The shells' largest |u_z| at the dofs u [m], and the z components of the
-/// reactions r summed over the nodes [N].
+/// The shells' largest |u_z| at the dofs u [m].
 double max_deflection(const shell::FEModel& fe, std::span<const double> u);
-double z_reaction(const shell::FEModel& fe, std::span<const double> r);
+/// The supports' force on the shells along z at the dofs u [N]: the held
+/// dofs' reactions r summed over the nodes, and a frame's springs.
+double support_reaction(const shell::FEModel& fe, std::span<const double> r, std::span<const double> u);
 
 struct ImpactConfig;
 /// Runs a scenario with shells.model = "fe": the slab all in shells (the

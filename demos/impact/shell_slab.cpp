@@ -118,10 +118,7 @@ private:
   std::vector<double> point_deflections() const { return _points->deflections(_solver->u()); }
 
   double max_deflection() const { return demo::max_deflection(*_fe, _solver->u()); }
-  double support_reaction() const
-  {
-    return z_reaction(*_fe, _solver->reactions()) + _fe->support_spring_force(_solver->u());
-  }
+  double support_reaction() const { return demo::support_reaction(*_fe, _solver->reactions(), _solver->u()); }
 
   void describe()
   {
