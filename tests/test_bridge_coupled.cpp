@@ -1217,4 +1217,11 @@ TEST_CASE("bars across the overlap: a uniform velocity is carried unchanged by s
   const dem::BarLine edge{{{0.08, 0.005, 0.0}, {0.08, 0.045, 0.0}}, 0.006, 0, 0};
   dem::Bars on_edge = dem::make_bars(std::span<const dem::BarLine>(&edge, 1), {dem::Steel{}}, {dem::BondLaw{}}, 4e-3);
   CHECK_THROWS_WITH(bridge::CoupledSolver(*c.fe, c.p, c.l, c.mat, o, on_edge), Contains("lies along the overlap's FE edge"));
+  // a bar that ends halfway across the band would leave the steel's force
+  // short there (its share 1 - eta, the shells' eta): refused, named
+  const dem::BarLine short_bar{{{0.1, 0.025, 0.0}, {0.196, 0.025, 0.0}}, 0.006, 0, 0};
+  dem::Bars ends_inside = dem::make_bars(std::span<const dem::BarLine>(&short_bar, 1), {dem::Steel{}}, {dem::BondLaw{}}, 4e-3);
+  CHECK_THROWS_WITH(bridge::CoupledSolver(*c.fe, c.p, c.l, c.mat, o, ends_inside),
+                    Contains("an end of its bar, lies inside the overlap at (0.1, 0.025, 0) m (the shells' weight 0.5")
+                        && Contains("must run on to its FE edge"));
 }

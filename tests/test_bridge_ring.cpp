@@ -403,6 +403,56 @@ TEST_CASE("ring overlap round a cylinder core, shells meshed by Gmsh: a uniform 
   CHECK_THROWS_WITH(bridge::slab_shells(MPI_COMM_WORLD, spec), Contains("must not exceed the overlap band"));
 }
 
+TEST_CASE("shell meshes that do not fit the slab's core are refused", "[bridge][ring][gmsh]")
+{
+  // A mesh made elsewhere for a coupled slab (read_gmsh, one's own) must
+  // leave the core to the spheres and reach the band's inner edge: shells
+  // inside the core would stand where only spheres should, a hole larger
+  // than the core would leave the band's spheres in no element (tied by
+  // extrapolation, or refused only at a thickness away). The meshes below
+  // are the builder's for other slabs, checked against this one.
+  using Catch::Contains;
+  for (auto cell : {shell::Cell::quadrilateral, shell::Cell::triangle})
+  {
+    const bridge::SlabSpec spec = cylinder_slab(cell);
+    const auto mesh_for = [&](auto change)
+    {
+      bridge::SlabSpec other = spec;
+      change(other);
+      return shells(bridge::slab_shells(MPI_COMM_WORLD, other));
+    };
+    CHECK_NOTHROW(bridge::check_slab_shells(shells(bridge::slab_shells(MPI_COMM_WORLD, spec)), spec));
+    // within 1 % of the band (0.2 mm) passes, 2 mm does not
+    CHECK_NOTHROW(bridge::check_slab_shells(mesh_for([](auto& o) { o.core_radius += 1e-4; }), spec));
+    CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for([](auto& o) { o.core_radius += 2e-3; }), spec),
+                      Contains("of the hole's edge lie beyond the cylinder core of radius 0.03 m")
+                          && Contains("the farthest by 0.002 m"));
+    CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for([](auto& o) { o.core_radius -= 2e-3; }), spec),
+                      Contains("lie inside the cylinder core of radius 0.03 m"));
+    // a square hole round the round core: its corners reach beyond
+    CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for(
+                                                    [](auto& o)
+                                                    {
+                                                      o.core = bridge::SlabSpec::Core::box;
+                                                      o.core_half = {o.core_radius, o.core_radius};
+                                                    }),
+                                                spec),
+                      Contains("of the hole's edge lie beyond") && Contains("the farthest by 0.0124"));
+    // the core elsewhere in the plan
+    CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for([](auto& o) { o.centre = {0.01, 0.0}; }), spec),
+                      Contains("lie inside the cylinder core"));
+    // at another height: the mid-surface of a 30 mm slab
+    CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for([](auto& o) { o.thickness = 0.03; }), spec),
+                      Contains("lie off the slab's mid-surface z = -0.01 m") && Contains("the farthest by 0.005 m"));
+    // a larger plan
+    CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for([](auto& o) { o.size = {0.2, 0.2}; }), spec),
+                      Contains("lie outside the slab's plan, 0.16 x 0.16 m"));
+    // a smaller plan
+    CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for([](auto& o) { o.size = {0.16, 0.14}; }), spec),
+                      Contains("it reaches -0.07 m along y, short of the slab's plan"));
+  }
+}
+
 namespace
 {
 

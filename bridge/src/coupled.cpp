@@ -197,6 +197,35 @@ void CoupledSolver::refuse_beyond(const Overlap& overlap, std::span<const double
   throw std::runtime_error(m.str());
 }
 
+void CoupledSolver::refuse_ends_in_band(const Overlap& overlap) const
+{
+  // Within the band the bar carries (1 - eta) of the steel's force and the
+  // shells' steel layers eta: the two add up to the whole only where the bar
+  // runs on to the band's FE edge (eta = 1). A bar ending inside the band
+  // would leave the steel short by (1 - eta) from its end to that edge.
+  constexpr double tol = 1e-3; // of the band's width, from either of its edges
+  std::vector<int> degree(_bars.nodes(), 0);
+  for (std::size_t e = 0; e < _bars.elements(); ++e)
+  {
+    ++degree[_bars.a[e]];
+    ++degree[_bars.b[e]];
+  }
+  for (std::size_t n = 0; n < _bars.nodes(); ++n)
+  {
+    const double* x = &_bars.x[3 * n];
+    const double eta = overlap.weight({x[0], x[1], x[2]});
+    if (degree[n] == 1 && eta > tol && eta < 1.0 - tol)
+    {
+      std::ostringstream m;
+      m << "bar node " << n << ", an end of its bar, lies inside the overlap at (" << x[0] << ", " << x[1] << ", "
+        << x[2] << ") m (the shells' weight " << eta << "; the overlap is " << overlap.what()
+        << "): a bar that enters the band must run on to its FE edge, where the shells' steel layers carry the "
+           "whole force; end it in the DE-only part or at the band's FE edge";
+      throw std::runtime_error(m.str());
+    }
+  }
+}
+
 void CoupledSolver::weigh_bars(const CouplingOptions& o)
 {
   // the bars' energies weighted as the links', their masses as the
@@ -207,6 +236,7 @@ void CoupledSolver::weigh_bars(const CouplingOptions& o)
   auto weight = [&](const double* x) { return 1.0 - o.overlap.weight({x[0], x[1], x[2]}); };
   refuse_beyond(o.overlap, _bars.x, "bar nodes",
                 "End the bars within the band: the shells' steel layers carry the reinforcement beyond it");
+  refuse_ends_in_band(o.overlap);
   for (std::size_t n = 0; n < _bars.nodes(); ++n)
     if (o.overlap.contains({_bars.x[3 * n], _bars.x[3 * n + 1], _bars.x[3 * n + 2]}))
       _bar_ids.push_back(static_cast<std::int32_t>(n));

@@ -93,6 +93,91 @@ std::shared_ptr<dolfinx::mesh::Mesh> slab_shells(MPI_Comm comm, const SlabSpec& 
   return shell::mesh_outline(comm, o, s.cell, p);
 }
 
+namespace
+{
+/// Counts the nodes whose excess is above tol; keeps the worst.
+struct Offence
+{
+  std::size_t count = 0;
+  double worst = 0.0;
+  std::array<double, 3> at{};
+  void see(double excess, double tol, const double* x)
+  {
+    if (!(excess > tol))
+      return;
+    ++count;
+    if (excess > worst)
+    {
+      worst = excess;
+      at = {x[0], x[1], x[2]};
+    }
+  }
+  void raise(const std::string& what, const std::string& allowed) const
+  {
+    if (count == 0)
+      return;
+    throw std::runtime_error("shell mesh: " + std::to_string(count) + " nodes " + what + ", the farthest by "
+                             + number_text(worst) + " m at (" + number_text(at[0]) + ", " + number_text(at[1]) + ", "
+                             + number_text(at[2]) + ") m; " + allowed);
+  }
+};
+
+std::string core_text(const SlabSpec& s)
+{
+  const std::string about = " about (" + number_text(s.centre[0]) + ", " + number_text(s.centre[1]) + ") m";
+  return s.core == SlabSpec::Core::box
+             ? "the box core of half sizes " + number_text(s.core_half[0]) + " x " + number_text(s.core_half[1]) + " m" + about
+             : "the cylinder core of radius " + number_text(s.core_radius) + " m" + about;
+}
+} // namespace
+
+void check_slab_shells(const shell::FEModel& fe, const SlabSpec& s)
+{
+  s.validate();
+  const Overlap o = slab_overlap(s);
+  const double tol = 0.01 * s.band, plane_tol = 1e-6 * s.thickness;
+  const double edge_tol = 1e-6 * std::max(s.size[0], s.size[1]);
+  const auto x = fe.node_coordinates();
+  const std::size_t n = fe.num_nodes();
+  std::vector<std::int32_t> all(n);
+  std::iota(all.begin(), all.end(), 0);
+  const auto boundary = fe.boundary_load_weights(all); // > 0 on the mesh's boundary
+  Offence plane, plan, inside, hole;
+  std::size_t hole_nodes = 0;
+  std::array<double, 4> reach{0.0, 0.0, 0.0, 0.0}; // the mesh's extent: -x, +x, -y, +y
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    const double* p = &x[3 * k];
+    reach = {std::max(reach[0], -p[0]), std::max(reach[1], p[0]), std::max(reach[2], -p[1]), std::max(reach[3], p[1])};
+    plane.see(std::abs(p[2] + 0.5 * s.thickness), plane_tol, p);
+    const double out = std::max(std::abs(p[0]) - 0.5 * s.size[0], std::abs(p[1]) - 0.5 * s.size[1]);
+    plan.see(out, edge_tol, p);
+    const double d = o.distance({p[0], p[1], p[2]});
+    inside.see(-d, tol, p);
+    if (boundary[k] > 0.0 && out < -tol) // on the mesh's boundary, not on the plan's edges: the hole's edge
+    {
+      ++hole_nodes;
+      hole.see(d, tol, p);
+    }
+  }
+  plane.raise("lie off the slab's mid-surface z = " + number_text(-0.5 * s.thickness) + " m",
+              "the shells must lie there (the frame: struck face z = 0)");
+  plan.raise("lie outside the slab's plan, " + number_text(s.size[0]) + " x " + number_text(s.size[1]) + " m about the origin",
+             "the shells must cover the plan and no more");
+  for (int q = 0; q < 4; ++q)
+    if (reach[q] < 0.5 * s.size[q / 2] - tol)
+      throw std::runtime_error("shell mesh: it reaches " + number_text(q % 2 ? reach[q] : -reach[q]) + " m along "
+                               + (q / 2 ? "y" : "x") + ", short of the slab's plan, " + number_text(s.size[0]) + " x "
+                               + number_text(s.size[1]) + " m about the origin: the shells must cover the plan");
+  inside.raise("lie inside " + core_text(s), "the shells' hole must match the core (within 1 % of the band, "
+                                                 + number_text(tol) + " m)");
+  hole.raise("of the hole's edge lie beyond " + core_text(s),
+             "the band's spheres there would lie in no shell element: the hole must match the core (within 1 % of the band, "
+                 + number_text(tol) + " m)");
+  if (hole_nodes == 0)
+    throw std::runtime_error("shell mesh: no hole for " + core_text(s) + ": the shells must leave the core to the spheres");
+}
+
 std::vector<std::int32_t> slab_support_dofs(const shell::FEModel& fe, const SlabSpec& s)
 {
   if (s.edges == SlabSpec::Edges::free || s.edges == SlabSpec::Edges::frame)

@@ -120,6 +120,7 @@ public:
   {
     Stopwatch clock;
     _fe = std::make_unique<shell::FEModel>(bridge::slab_shells(MPI_COMM_WORLD, _spec), shell_material(_s));
+    bridge::check_slab_shells(*_fe, _spec); // Gmsh's mesh fits the core (a guard: it does by construction)
     if (_s.reinforcement.layers > 0)
       _fe->set_reinforcement(shell_steel(_s, _fe->nodal_normals()[2] >= 0.0 ? 1.0 : -1.0));
     // before the coupler, whose step counts them

@@ -100,8 +100,9 @@ public:
   /// (de().bars()). The time step is also bounded by the Gershgorin bound
   /// of the spheres and nodes the multipliers leave free (the bars' own
   /// rows are not in the power iteration).
-  /// @throws std::runtime_error as above, and for bar nodes beyond the
-  ///   overlap on the FE side (named with their count and place).
+  /// @throws std::runtime_error as above, for bar nodes beyond the overlap
+  ///   on the FE side (named with their count and place), and for a bar
+  ///   that ends inside the band (it must run on to the band's FE edge).
   CoupledSolver(shell::FEModel& fe, dem::Particles& p, dem::Links& l, const dem::Material& mat,
                 const CouplingOptions& o, dem::Bars bars);
   ~CoupledSolver();
@@ -170,6 +171,7 @@ private:
   // no point of x (3 per point) past the band's FE edge: refused naming `what`
   static void refuse_beyond(const Overlap& overlap, std::span<const double> x, const char* what, const char* advice);
   void weigh_bars(const CouplingOptions& o);        // the bars' masses, areas, springs, bonds
+  void refuse_ends_in_band(const Overlap& overlap) const; // no bar ends strictly inside the band
   void locate_overlap();                            // G_FE of the overlap's particles and bar nodes
   CouplingOperator locate_points(const std::vector<double>& pts) const;
   void coupled_time_step(const CouplingOptions& o, const dem::Material& mat); // and the step to use

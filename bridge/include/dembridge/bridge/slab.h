@@ -63,6 +63,16 @@ dem::Region slab_de_region(const SlabSpec& s);
 /// The shells: the slab's plan less the core, meshed by Gmsh (elements of
 /// about element_size), placed at the mid-surface.
 std::shared_ptr<dolfinx::mesh::Mesh> slab_shells(MPI_Comm comm, const SlabSpec& s);
+/// Checks that shells meshed elsewhere (shell::read_gmsh, a mesh of one's
+/// own) fit the slab: every node on the mid-surface (z = -thickness / 2,
+/// within 1e-6 of the thickness) and in the plan; none inside the core and
+/// the hole's edge on the core's boundary, both within 1 % of the band (the
+/// band's spheres would otherwise lie in no shell element, or shells would
+/// stand where only spheres should). slab_shells' meshes pass by
+/// construction.
+/// @throws std::runtime_error naming how many nodes are off, the worst by
+///   how much and where.
+void check_slab_shells(const shell::FEModel& fe, const SlabSpec& s);
 /// The dofs the edges hold (none for free edges): the nodes on the plan's
 /// outer boundary, their translations (simply supported) or all six
 /// (clamped).
