@@ -425,10 +425,10 @@ TEST_CASE("shell meshes that do not fit the slab's core are refused", "[bridge][
     // within 1 % of the band (0.2 mm) passes, 2 mm does not
     CHECK_NOTHROW(bridge::check_slab_shells(mesh_for([](auto& o) { o.core_radius += 1e-4; }), spec));
     CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for([](auto& o) { o.core_radius += 2e-3; }), spec),
-                      Contains("of the hole's edge lie beyond the cylinder core of radius 0.03 m")
+                      Contains("of the hole's edge lie beyond a cylinder core of radius 0.03 m")
                           && Contains("the farthest by 0.002 m"));
     CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for([](auto& o) { o.core_radius -= 2e-3; }), spec),
-                      Contains("lie inside the cylinder core of radius 0.03 m"));
+                      Contains("lie inside a cylinder core of radius 0.03 m"));
     // a square hole round the round core: its corners reach beyond
     CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for(
                                                     [](auto& o)
@@ -440,7 +440,7 @@ TEST_CASE("shell meshes that do not fit the slab's core are refused", "[bridge][
                       Contains("of the hole's edge lie beyond") && Contains("the farthest by 0.0124"));
     // the core elsewhere in the plan
     CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for([](auto& o) { o.centre = {0.01, 0.0}; }), spec),
-                      Contains("lie inside the cylinder core"));
+                      Contains("lie inside a cylinder core"));
     // at another height: the mid-surface of a 30 mm slab
     CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for([](auto& o) { o.thickness = 0.03; }), spec),
                       Contains("lie off the slab's mid-surface z = -0.01 m") && Contains("the farthest by 0.005 m"));

@@ -122,13 +122,6 @@ struct Offence
   }
 };
 
-std::string core_text(const SlabSpec& s)
-{
-  const std::string about = " about (" + number_text(s.centre[0]) + ", " + number_text(s.centre[1]) + ") m";
-  return s.core == SlabSpec::Core::box
-             ? "the box core of half sizes " + number_text(s.core_half[0]) + " x " + number_text(s.core_half[1]) + " m" + about
-             : "the cylinder core of radius " + number_text(s.core_radius) + " m" + about;
-}
 } // namespace
 
 void check_slab_shells(const shell::FEModel& fe, const SlabSpec& s)
@@ -169,13 +162,13 @@ void check_slab_shells(const shell::FEModel& fe, const SlabSpec& s)
       throw std::runtime_error("shell mesh: it reaches " + number_text(q % 2 ? reach[q] : -reach[q]) + " m along "
                                + (q / 2 ? "y" : "x") + ", short of the slab's plan, " + number_text(s.size[0]) + " x "
                                + number_text(s.size[1]) + " m about the origin: the shells must cover the plan");
-  inside.raise("lie inside " + core_text(s), "the shells' hole must match the core (within 1 % of the band, "
+  inside.raise("lie inside " + o.what(), "the shells' hole must match the core (within 1 % of the band, "
                                                  + number_text(tol) + " m)");
-  hole.raise("of the hole's edge lie beyond " + core_text(s),
+  hole.raise("of the hole's edge lie beyond " + o.what(),
              "the band's spheres there would lie in no shell element: the hole must match the core (within 1 % of the band, "
                  + number_text(tol) + " m)");
   if (hole_nodes == 0)
-    throw std::runtime_error("shell mesh: no hole for " + core_text(s) + ": the shells must leave the core to the spheres");
+    throw std::runtime_error("shell mesh: no hole for " + o.what() + ": the shells must leave the core to the spheres");
 }
 
 std::vector<std::int32_t> slab_support_dofs(const shell::FEModel& fe, const SlabSpec& s)
