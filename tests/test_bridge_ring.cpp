@@ -226,6 +226,18 @@ TEST_CASE("ring overlap: the shells' mesh with a hole", "[shell][ring]")
                         && x[3 * k + 1] < 0.11 - 1e-12;
     CHECK(!inside);
   }
+  // its boundary: the outline's 4 x 16 nodes and the hole's edge, 4 x 6
+  const auto edge = fe.boundary_nodes();
+  CHECK(edge.size() == 4 * 16 + 4 * 6);
+  for (std::int32_t k : edge)
+  {
+    const double* p = &x[3 * k];
+    auto on = [](double v, double a) { return std::abs(v - a) < 1e-12; };
+    const bool outline = on(p[0], 0.0) || on(p[0], side) || on(p[1], 0.0) || on(p[1], side);
+    const bool hole = (on(p[0], 0.05) || on(p[0], 0.11) || on(p[1], 0.05) || on(p[1], 0.11))
+                      && p[0] > 0.05 - 1e-12 && p[0] < 0.11 + 1e-12 && p[1] > 0.05 - 1e-12 && p[1] < 0.11 + 1e-12;
+    CHECK((outline || hole));
+  }
   using Catch::Contains;
   CHECK_THROWS_WITH(shell::create_shell_rectangle_with_hole(MPI_COMM_WORLD, side, side, 16, 16,
                                                             {{0.055, 0.05}, {0.11, 0.11}}, shell::Cell::quadrilateral),
@@ -450,6 +462,11 @@ TEST_CASE("shell meshes that do not fit the slab's core are refused", "[bridge][
     // a smaller plan
     CHECK_THROWS_WITH(bridge::check_slab_shells(mesh_for([](auto& o) { o.size = {0.16, 0.14}; }), spec),
                       Contains("it reaches -0.07 m along y, short of the slab's plan"));
+    // no hole: 3 x 3 elements of 53 mm, whose nodes all lie outside the
+    // 30 mm core, cover it whole
+    const shell::Placement at{{-0.5 * side, -0.5 * side, -0.5 * thick}};
+    CHECK_THROWS_WITH(bridge::check_slab_shells(shells(shell::create_shell_rectangle(MPI_COMM_WORLD, side, side, 3, 3, cell, at)), spec),
+                      Contains("no hole for a cylinder core of radius 0.03 m"));
   }
 }
 

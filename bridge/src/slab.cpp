@@ -132,9 +132,9 @@ void check_slab_shells(const shell::FEModel& fe, const SlabSpec& s)
   const double edge_tol = 1e-6 * std::max(s.size[0], s.size[1]);
   const auto x = fe.node_coordinates();
   const std::size_t n = fe.num_nodes();
-  std::vector<std::int32_t> all(n);
-  std::iota(all.begin(), all.end(), 0);
-  const auto boundary = fe.boundary_load_weights(all); // > 0 on the mesh's boundary
+  std::vector<std::uint8_t> boundary(n, 0); // 1 on the mesh's boundary: the plan's edges and the hole's
+  for (std::int32_t k : fe.boundary_nodes())
+    boundary[k] = 1;
   Offence plane, plan, inside, hole;
   std::size_t hole_nodes = 0;
   std::array<double, 4> reach{0.0, 0.0, 0.0, 0.0}; // the mesh's extent: -x, +x, -y, +y
@@ -147,7 +147,7 @@ void check_slab_shells(const shell::FEModel& fe, const SlabSpec& s)
     plan.see(out, edge_tol, p);
     const double d = o.distance({p[0], p[1], p[2]});
     inside.see(-d, tol, p);
-    if (boundary[k] > 0.0 && out < -tol) // on the mesh's boundary, not on the plan's edges: the hole's edge
+    if (boundary[k] && out < -tol) // on the mesh's boundary, not on the plan's edges: the hole's edge
     {
       ++hole_nodes;
       hole.see(d, tol, p);

@@ -607,31 +607,52 @@ double FEModel::critical_time_step(std::span<const double> mass) const
   return 2.0 / std::sqrt(lmax);
 }
 
-std::vector<double> FEModel::boundary_load_weights(std::span<const std::int32_t> nodes) const
+std::vector<std::vector<std::int32_t>> FEModel::boundary_facets() const
 {
   auto& I = *_impl;
   auto& topo = I.mesh->topology_mutable();
   const int tdim = topo.dim(), fdim = tdim - 1;
-  I.mesh->topology_mutable().create_entities(fdim);
+  topo.create_entities(fdim);
   topo.create_connectivity(fdim, tdim);
   topo.create_connectivity(tdim, fdim);
   const auto f_to_c = topo.connectivity(fdim, tdim);
   const auto c_to_f = topo.connectivity(tdim, fdim);
   const auto& layout = I.V->dofmap()->element_dof_layout();
-  std::set<std::int32_t> selected(nodes.begin(), nodes.end());
-  std::vector<double> w(nodes.size(), 0.0);
-  std::map<std::int32_t, std::size_t> pos;
-  for (std::size_t k = 0; k < nodes.size(); ++k)
-    pos[nodes[k]] = k;
+  std::vector<std::vector<std::int32_t>> facets;
   for (std::int32_t f : dolfinx::mesh::exterior_facet_indices(topo))
   {
     const std::int32_t c = f_to_c->links(f)[0];
     const auto cf = c_to_f->links(c);
     const int lf = static_cast<int>(std::find(cf.begin(), cf.end(), f) - cf.begin());
-    const auto& closure = layout.entity_closure_dofs(fdim, lf);
     std::vector<std::int32_t> fn;
-    for (int k : closure)
+    for (int k : layout.entity_closure_dofs(fdim, lf))
       fn.push_back(I.cells[c * I.npc + k]);
+    facets.push_back(std::move(fn));
+  }
+  return facets;
+}
+
+std::vector<std::int32_t> FEModel::boundary_nodes() const
+{
+  std::vector<std::int32_t> nodes;
+  for (const auto& fn : boundary_facets())
+    nodes.insert(nodes.end(), fn.begin(), fn.end());
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  return nodes;
+}
+
+std::vector<double> FEModel::boundary_load_weights(std::span<const std::int32_t> nodes) const
+{
+  auto& I = *_impl;
+  const int tdim = I.mesh->topology().dim();
+  std::set<std::int32_t> selected(nodes.begin(), nodes.end());
+  std::vector<double> w(nodes.size(), 0.0);
+  std::map<std::int32_t, std::size_t> pos;
+  for (std::size_t k = 0; k < nodes.size(); ++k)
+    pos[nodes[k]] = k;
+  for (const auto& fn : boundary_facets())
+  {
     if (!std::all_of(fn.begin(), fn.end(), [&](auto n) { return selected.count(n) > 0; }))
       continue;
     auto p = [&](int k, int i) { return I.x[3 * fn[k] + i]; };

@@ -187,6 +187,10 @@ public:
   /// @throws std::runtime_error if the nodes span no boundary facet.
   std::vector<double> boundary_load_weights(std::span<const std::int32_t> nodes) const;
 
+  /// The nodes on the mesh's boundary: those of its exterior facets (edges
+  /// of shells, faces of solids; the outline and any hole's edge), sorted.
+  std::vector<std::int32_t> boundary_nodes() const;
+
   /// Shells: a pressure p(t) [Pa] on the given nodes as a nodal load,
   /// f_i = p(t) A_i n_i with A_i the tributary area and n_i the average
   /// normal (positive p pushes along +n). @throws for solids or no node.
@@ -212,6 +216,8 @@ public:
   std::shared_ptr<dolfinx::mesh::Mesh> mesh() const;
 
 private:
+  /// The nodes of each exterior facet, in the facet's closure order.
+  std::vector<std::vector<std::int32_t>> boundary_facets() const;
   struct Impl;
   std::unique_ptr<Impl> _impl;
 };
