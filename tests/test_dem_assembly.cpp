@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <memory>
 #include <unistd.h>
 
@@ -1017,6 +1018,66 @@ TEST_CASE("neighbour list: a sphere is searched again after a move of 0.3 skin",
   CHECK(nl.update(p.x, p.r, none));
   CHECK(nl.builds() == 3);
   CHECK(nl.partial_builds() == 1);
+}
+
+TEST_CASE("neighbour list: removed spheres lose their pairs, the others keep theirs and their histories",
+          "[dem]")
+{
+  // What the solver does when fragments leave the domain: the removed
+  // spheres' pairs go, every other pair stays with its history, and the
+  // searches leave the removed spheres out from then on, with no rebuild.
+  auto p = lattice(4);
+  const Links none;
+  const double skin = 0.2e-3;
+  NeighbourList nl(skin);
+  std::vector<std::uint8_t> skip(p.size(), 0);
+  nl.update(p.x, p.r, none, skip);
+  for (std::size_t q = 0; q < nl.size(); ++q)
+    nl.fs[3 * q] = nl.a[q] * 1000.0 + nl.b[q];
+  const auto a0 = nl.a, b0 = nl.b;
+  const std::vector<std::int32_t> gone{5, 21};
+  for (auto i : gone)
+    skip[i] = 1;
+  const auto version = nl.version();
+  nl.remove(p.x, gone, skip);
+  CHECK(nl.version() == version + 1);
+  CHECK(nl.builds() == 1); // no search
+  std::size_t kept = 0;
+  for (std::size_t q = 0; q < a0.size(); ++q)
+    kept += !skip[a0[q]] && !skip[b0[q]];
+  CHECK(nl.size() == kept);
+  for (std::size_t q = 0; q < nl.size(); ++q)
+  {
+    CHECK((!skip[nl.a[q]] && !skip[nl.b[q]]));
+    CHECK(nl.fs[3 * q] == nl.a[q] * 1000.0 + nl.b[q]);
+  }
+  // the grid holds the others only
+  REQUIRE(nl.grid() != nullptr);
+  CHECK(nl.grid()->items().size() == p.size() - gone.size());
+  // a removed sphere that moves is not searched; another that moves onto
+  // a removed one's place lists no pair with it
+  p.x[3 * 5] += 10.0 * skin;
+  CHECK(!nl.update(p.x, p.r, none, skip));
+  for (int k = 0; k < 3; ++k)
+    p.x[3 * 6 + k] = p.x[3 * 21 + k] + (k == 0 ? 0.5e-3 : 0.0);
+  CHECK(nl.update(p.x, p.r, none, skip));
+  // every pair of the others within the skin is listed, none of the removed
+  std::set<std::pair<std::int32_t, std::int32_t>> listed;
+  std::size_t removed_listed = 0;
+  for (std::size_t q = 0; q < nl.size(); ++q)
+  {
+    listed.insert({nl.a[q], nl.b[q]});
+    removed_listed += skip[nl.a[q]] || skip[nl.b[q]];
+  }
+  CHECK(removed_listed == 0);
+  std::size_t missing = 0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    for (std::size_t j = i + 1; j < p.size(); ++j)
+      missing += !skip[i] && !skip[j]
+                 && std::hypot(p.x[3 * j] - p.x[3 * i], p.x[3 * j + 1] - p.x[3 * i + 1], p.x[3 * j + 2] - p.x[3 * i + 2])
+                        < p.r[i] + p.r[j] + skin
+                 && !listed.count({static_cast<std::int32_t>(i), static_cast<std::int32_t>(j)});
+  CHECK(missing == 0);
 }
 
 TEST_CASE("neighbour list: complete, sorted and keeping contact histories while a few spheres "

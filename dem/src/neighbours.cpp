@@ -541,6 +541,29 @@ void NeighbourList::add_broken_links(const Links& links, std::span<const std::in
     end_search();
 }
 
+void NeighbourList::remove(std::span<const double> x, std::span<const std::int32_t> gone,
+                           std::span<const std::uint8_t> skip)
+{
+  if (_pending)
+    throw std::logic_error("neighbour list: spheres removed while a search waits for add_broken_links()");
+  if (_builds == 0 || _stale || _x_build.size() != x.size())
+  {
+    _stale = true; // nothing listed yet, or a rebuild due anyway
+    return;
+  }
+  // their pairs dropped as a search of movers that finds none would
+  _skip.assign(skip.begin(), skip.end());
+  _moving.assign(x.size() / 3, 0);
+  for (auto i : gone)
+    _moving[i] = 1;
+  merge({}, {}, {}, _moving, false);
+  _moving.assign(x.size() / 3, 0);
+  // the grid over the positions now: the others are still within
+  // mover_share x skin of where they were searched, as grid() promises
+  _grid.emplace(x, _cell, _skip);
+  _x_grid.assign(x.begin(), x.end());
+}
+
 void NeighbourList::keep_rolling()
 {
   if (_rolling)

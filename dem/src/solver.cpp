@@ -132,7 +132,7 @@ void DemSolver::remove_escaped()
   // histories of this step, for the reactions) are unchanged
   for (auto i : gone)
     std::fill(&_held[6 * i], &_held[6 * i] + 6, 1);
-  _nl.invalidate();
+  _nl.remove(_p.x, gone, _removed);
 }
 
 DemSolver::~DemSolver() = default;

@@ -136,8 +136,14 @@ public:
               std::span<const std::uint8_t> skip = {}, bool defer = false);
   /// How far a sphere searched again moves from where it was searched [skin].
   static constexpr double mover_share = 0.3;
-  /// The next update() rebuilds (spheres were removed from the computation).
+  /// The next update() rebuilds.
   void invalidate() { _stale = true; }
+  /// Spheres removed from the computation (`gone`): their pairs are dropped
+  /// and the grid made again without them over the positions x; the other
+  /// pairs and their histories stay, and the list is not rebuilt. `skip`
+  /// flags every sphere removed so far, `gone` included: the searches leave
+  /// them out from now on.
+  void remove(std::span<const double> x, std::span<const std::int32_t> gone, std::span<const std::uint8_t> skip);
 
   /// Adds the pairs of links that have just broken (sorted by link index,
   /// hence by (a, b)), with no contact history, so a contact can take over
@@ -153,7 +159,8 @@ public:
   std::size_t version() const { return _version; }
   double skin() const { return _skin; }
   /// The cell grid of the last change (null before the first), over the
-  /// positions then; spheres have moved less than drift() since.
+  /// positions then (at a removal, over the positions of that moment);
+  /// spheres have moved less than drift() since.
   const CellGrid* grid() const { return _grid ? &*_grid : nullptr; }
   /// The most a sphere moves from where grid() has it, or between two
   /// changes of the list [m]: twice mover_share x skin.
