@@ -546,6 +546,13 @@ void NeighbourList::remove(std::span<const double> x, std::span<const std::int32
 {
   if (_pending)
     throw std::logic_error("neighbour list: spheres removed while a search waits for add_broken_links()");
+  const std::size_t np = x.size() / 3;
+  if (skip.size() != np)
+    throw std::logic_error("neighbour list: " + std::to_string(skip.size()) + " removal flags for "
+                           + std::to_string(np) + " spheres");
+  for (auto i : gone)
+    if (i < 0 || static_cast<std::size_t>(i) >= np || !skip[i])
+      throw std::logic_error("neighbour list: removed sphere " + std::to_string(i) + " out of range or not flagged");
   if (_builds == 0 || _stale || _x_build.size() != x.size())
   {
     _stale = true; // nothing listed yet, or a rebuild due anyway
@@ -553,13 +560,14 @@ void NeighbourList::remove(std::span<const double> x, std::span<const std::int32
   }
   // their pairs dropped as a search of movers that finds none would
   _skip.assign(skip.begin(), skip.end());
-  _moving.assign(x.size() / 3, 0);
+  _moving.assign(np, 0);
   for (auto i : gone)
     _moving[i] = 1;
   merge({}, {}, {}, _moving, false);
-  _moving.assign(x.size() / 3, 0);
-  // the grid over the positions now: the others are still within
-  // mover_share x skin of where they were searched, as grid() promises
+  _moving.assign(np, 0);
+  // the grid over the positions now, without them (the update() that
+  // follows at these positions searches the spheres past mover_share x
+  // skin, keeping what grid() promises)
   _grid.emplace(x, _cell, _skip);
   _x_grid.assign(x.begin(), x.end());
 }

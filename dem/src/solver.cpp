@@ -132,7 +132,9 @@ void DemSolver::remove_escaped()
   // histories of this step, for the reactions) are unchanged
   for (auto i : gone)
     std::fill(&_held[6 * i], &_held[6 * i] + 6, 1);
+  const double t0 = omp_get_wtime();
   _nl.remove(_p.x, gone, _removed);
+  _time.neighbours += omp_get_wtime() - t0;
 }
 
 DemSolver::~DemSolver() = default;

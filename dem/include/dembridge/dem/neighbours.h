@@ -115,8 +115,9 @@ public:
   /// Brings the list up to date: the spheres that moved more than
   /// `mover_share` x skin since they were last searched (the movers) are
   /// searched again, their pairs replaced; the whole list is rebuilt on the
-  /// first call, after invalidate(), or when the movers are more than an
-  /// eighth of the spheres. Returns true if the list changed.
+  /// first call, after a remove() that came before it, or when the movers
+  /// are more than an eighth of the spheres. Returns true if the list
+  /// changed.
   ///
   /// Why it stays complete: a pair left out had a gap of at least a skin
   /// when the later of its two spheres was searched. Since then that sphere
@@ -136,13 +137,13 @@ public:
               std::span<const std::uint8_t> skip = {}, bool defer = false);
   /// How far a sphere searched again moves from where it was searched [skin].
   static constexpr double mover_share = 0.3;
-  /// The next update() rebuilds.
-  void invalidate() { _stale = true; }
   /// Spheres removed from the computation (`gone`): their pairs are dropped
   /// and the grid made again without them over the positions x; the other
   /// pairs and their histories stay, and the list is not rebuilt. `skip`
   /// flags every sphere removed so far, `gone` included: the searches leave
-  /// them out from now on.
+  /// them out from now on. Call update() at the same positions before
+  /// anything reads grid(): spheres past mover_share x skin are searched
+  /// there, which keeps the drift() promise.
   void remove(std::span<const double> x, std::span<const std::int32_t> gone, std::span<const std::uint8_t> skip);
 
   /// Adds the pairs of links that have just broken (sorted by link index,
@@ -155,7 +156,8 @@ public:
 
   std::size_t size() const { return a.size(); }
   std::size_t builds() const { return _builds; }
-  /// Changes whenever the list of pairs changes (rebuild or added pairs).
+  /// Changes whenever the list of pairs changes (rebuild, added pairs,
+  /// removed spheres).
   std::size_t version() const { return _version; }
   double skin() const { return _skin; }
   /// The cell grid of the last change (null before the first), over the
@@ -165,7 +167,7 @@ public:
   /// The most a sphere moves from where grid() has it, or between two
   /// changes of the list [m]: twice mover_share x skin.
   double drift() const { return 2.0 * mover_share * _skin; }
-  /// The searches of movers alone (builds() counts every change).
+  /// The searches of movers alone (builds() counts every search).
   std::size_t partial_builds() const { return _partial; }
   /// Bytes held by the list.
   std::size_t bytes() const;
@@ -246,7 +248,7 @@ private:
   // the columns a merge writes into, then swaps with the list's: the list's
   // previous columns, kept so that a merge neither allocates nor clears
   Columns _spare;
-  std::vector<std::uint8_t> _skip; // the spheres left out of the last build
+  std::vector<std::uint8_t> _skip; // the spheres left out of the searches (removed)
   std::optional<CellGrid> _grid;
   // the movers of the last search (flag per sphere, cleared by end_search)
   std::vector<std::uint8_t> _moving;
