@@ -560,11 +560,13 @@ void NeighbourList::remove(std::span<const double> x, std::span<const std::int32
   }
   // their pairs dropped as a search of movers that finds none would
   _skip.assign(skip.begin(), skip.end());
-  _moving.assign(np, 0);
+  if (_moving.size() != np)
+    _moving.assign(np, 0); // (all clear between searches: end_search)
   for (auto i : gone)
     _moving[i] = 1;
   merge({}, {}, {}, _moving, false);
-  _moving.assign(np, 0);
+  for (auto i : gone)
+    _moving[i] = 0;
   // the grid over the positions now, without them (the update() that
   // follows at these positions searches the spheres past mover_share x
   // skin, keeping what grid() promises)
