@@ -1052,8 +1052,18 @@ TEST_CASE("neighbour list: removed spheres lose their pairs, the others keep the
   std::vector<std::uint8_t> unflagged(p.size(), 0);
   CHECK_THROWS_WITH(nl.remove(p.x, gone, unflagged), Contains("removed sphere 5 out of range or not flagged"));
   nl.remove(p.x, gone, skip);
+  CHECK(nl.version() == version); // their pairs go at the next update
+  // as the solver does it: the update deferred to the force loop's merge
+  // of broken links (add_broken_links), or at once
+  const bool defer = GENERATE(false, true);
+  INFO("deferred: " << defer);
+  CHECK(nl.update(p.x, p.r, none, skip, defer)); // no sphere moved: a search of none
+  CHECK(nl.pending() == defer);
+  if (defer)
+    nl.add_broken_links(none, {});
   CHECK(nl.version() == version + 1);
-  CHECK(nl.builds() == 1); // no search
+  CHECK(nl.builds() == 2);
+  CHECK(nl.partial_builds() == 1); // no rebuild
   std::size_t kept = 0;
   for (std::size_t q = 0; q < a0.size(); ++q)
     kept += !skip[a0[q]] && !skip[b0[q]];
@@ -1072,7 +1082,14 @@ TEST_CASE("neighbour list: removed spheres lose their pairs, the others keep the
   CHECK(!nl.update(p.x, p.r, none, skip));
   for (int k = 0; k < 3; ++k)
     p.x[3 * 6 + k] = p.x[3 * 21 + k] + (k == 0 ? 0.5e-3 : 0.0);
-  CHECK(nl.update(p.x, p.r, none, skip));
+  // ... in the same step as another removal: one search drops its pairs too
+  REQUIRE(p.size() > 40);
+  skip[40] = 1;
+  nl.remove(p.x, std::vector<std::int32_t>{40}, skip);
+  CHECK(nl.update(p.x, p.r, none, skip, defer));
+  if (defer)
+    nl.add_broken_links(none, {});
+  CHECK(nl.partial_builds() == 2);
   // every pair of the others closer than R_a + R_b + 0.1 skin (what the
   // list guarantees, neighbours.h) is listed, none of the removed
   std::set<std::pair<std::int32_t, std::int32_t>> listed;

@@ -87,6 +87,20 @@ double elastic_energy(const Particles& p, const Links& l, const NeighbourList& n
   return links + contacts;
 }
 
+double elastic_energy_of(const Particles& p, const Links& l, const NeighbourList& nl, const Material& mat,
+                         std::span<const std::size_t> links, std::span<const std::size_t> pairs)
+{
+  const LinkLaw base = mat.law(1.0, 1.0, 1.0);
+  const bool compacting = mat.compaction.on() && l.compaction.size() == l.size();
+  const ContactFactors cf = contact_factors(mat);
+  double e = 0.0;
+  for (auto k : links)
+    e += link_energy(p, l, mat, base, compacting, k);
+  for (auto q : pairs)
+    e += contact_energy(p, l, nl, mat, cf, compacting, q);
+  return e;
+}
+
 double softening_energy(const Particles& p, const Links& l, const Material& mat)
 {
   const LinkLaw base = mat.law(1.0, 1.0, 1.0);

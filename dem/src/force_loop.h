@@ -82,6 +82,12 @@ struct ForceScratch
 void compute_forces(Particles& p, Links& l, NeighbourList& nl, const Material& mat, double dt,
                     ForceCounters& c, ForceScratch& scratch);
 
+/// The part of elastic_energy() held by the given links and neighbour-list
+/// pairs [J], summed in the order given (energy.cpp): what leaves with
+/// removed spheres, without a sum over the whole assembly.
+double elastic_energy_of(const Particles& p, const Links& l, const NeighbourList& nl, const Material& mat,
+                         std::span<const std::size_t> links, std::span<const std::size_t> pairs);
+
 namespace impl
 {
 inline double dot3(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }

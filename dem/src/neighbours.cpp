@@ -129,7 +129,7 @@ bool NeighbourList::update(std::span<const double> x, std::span<const double> r,
   std::vector<std::int32_t> movers;
   for (const auto& f : found)
     movers.insert(movers.end(), f.begin(), f.end());
-  if (movers.empty())
+  if (movers.empty() && _dropped.empty())
     return false;
   if (movers.size() > np / 8)
     build(x, r, links, skip);
@@ -312,6 +312,7 @@ void NeighbourList::build(std::span<const double> x, std::span<const double> r, 
   // the new list, with the history of the pairs listed before
   const Found all = joined(chunk);
   merge(all.a, all.b, all.link, {}, true);
+  end_search(); // (the removed spheres' flags clear: the rebuild left their pairs out)
   _x_build.assign(x.begin(), x.end());
   _x_grid.assign(x.begin(), x.end());
   ++_builds;
@@ -350,6 +351,9 @@ void NeighbourList::end_search()
   for (auto m : _movers)
     _moving[m] = 0;
   _movers.clear();
+  for (auto i : _dropped)
+    _moving[i] = 0;
+  _dropped.clear();
   _pending = false;
 }
 
@@ -558,20 +562,17 @@ void NeighbourList::remove(std::span<const double> x, std::span<const std::int32
     _stale = true; // nothing listed yet, or a rebuild due anyway
     return;
   }
-  // their pairs dropped as a search of movers that finds none would
+  // their pairs go at the next update()'s merge, flagged as movers are
+  // (the flags are all clear between searches: end_search)
   _skip.assign(skip.begin(), skip.end());
   if (_moving.size() != np)
-    _moving.assign(np, 0); // (all clear between searches: end_search)
+    _moving.assign(np, 0);
   for (auto i : gone)
-    _moving[i] = 1;
-  merge({}, {}, {}, _moving, false);
-  for (auto i : gone)
-    _moving[i] = 0;
-  // the grid over the positions now, without them (the update() that
-  // follows at these positions searches the spheres past mover_share x
-  // skin, keeping what grid() promises)
-  _grid.emplace(x, _cell, _skip);
-  _x_grid.assign(x.begin(), x.end());
+    if (!_moving[i])
+    {
+      _moving[i] = 1;
+      _dropped.push_back(i);
+    }
 }
 
 void NeighbourList::keep_rolling()

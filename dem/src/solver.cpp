@@ -84,33 +84,40 @@ void DemSolver::remove_escaped()
   if (gone.empty())
     return;
   // the energy their links and contacts (with spheres and bodies) hold
-  // goes with them
-  auto stored_energy = [&]
+  // goes with them: the links and pairs they end, summed alone, and what
+  // the add-ons (bodies' contacts) hold before and after
+  auto addons_energy = [&]
   {
-    double e = elastic_energy(_p, _l, _nl, _mat);
+    double e = 0.0;
     for (const auto& a : _addons)
       a->stored_energy(view(), e);
     return e;
   };
-  const double before = stored_energy();
+  const double addons_before = addons_energy();
   for (auto i : gone)
     _removed[i] = 1;
-  for (const auto& a : _addons)
-    a->spheres_removed(view());
+  std::vector<std::size_t> links_ended, pairs_ended;
   for (std::size_t k = 0; k < _l.size(); ++k)
     if (_l.state[k] == LinkState::intact && (_removed[_l.a[k]] || _removed[_l.b[k]]))
-      _l.state[k] = LinkState::removed;
+      links_ended.push_back(k);
   for (std::size_t q = 0; q < _nl.size(); ++q)
-    if (_removed[_nl.a[q]] || _removed[_nl.b[q]])
-    {
-      _nl.touching[q] = 0;
+    if (_nl.touching[q] && (_removed[_nl.a[q]] || _removed[_nl.b[q]]))
+      pairs_ended.push_back(q);
+  double stored = elastic_energy_of(_p, _l, _nl, _mat, links_ended, pairs_ended);
+  for (const auto& a : _addons)
+    a->spheres_removed(view());
+  for (auto k : links_ended)
+    _l.state[k] = LinkState::removed;
+  for (auto q : pairs_ended)
+  {
+    _nl.touching[q] = 0;
+    for (int k = 0; k < 3; ++k)
+      _nl.fs[3 * q + k] = 0.0;
+    if (_nl.rolling())
       for (int k = 0; k < 3; ++k)
-        _nl.fs[3 * q + k] = 0.0;
-      if (_nl.rolling())
-        for (int k = 0; k < 3; ++k)
-          _nl.mr[3 * q + k] = 0.0;
-    }
-  const double stored = before - stored_energy();
+        _nl.mr[3 * q + k] = 0.0;
+  }
+  stored += addons_before - addons_energy();
   double kinetic = 0.0;
   for (auto i : gone)
   {

@@ -115,8 +115,9 @@ public:
   /// Brings the list up to date: the spheres that moved more than
   /// `mover_share` x skin since they were last searched (the movers) are
   /// searched again, their pairs replaced; the whole list is rebuilt on the
-  /// first call, after a remove() that came before it, or when the movers
-  /// are more than an eighth of the spheres. Returns true if the list
+  /// first call (a remove() before it included) or when the movers are
+  /// more than an eighth of the spheres; spheres remove()d since the last
+  /// call lose their pairs here. Returns true if the list
   /// changed.
   ///
   /// Why it stays complete: a pair left out had a gap of at least a skin
@@ -137,13 +138,15 @@ public:
               std::span<const std::uint8_t> skip = {}, bool defer = false);
   /// How far a sphere searched again moves from where it was searched [skin].
   static constexpr double mover_share = 0.3;
-  /// Spheres removed from the computation (`gone`): their pairs are dropped
-  /// and the grid made again without them over the positions x; the other
-  /// pairs and their histories stay, and the list is not rebuilt. `skip`
-  /// flags every sphere removed so far, `gone` included: the searches leave
-  /// them out from now on. Call update() at the same positions before
-  /// anything reads grid(): spheres past mover_share x skin are searched
-  /// there, which keeps the drift() promise.
+  /// Spheres removed from the computation (`gone`): the next update() drops
+  /// their pairs in the merge of its search (as a mover's pairs are
+  /// replaced; a search of no sphere if none moved) and makes the grid
+  /// without them; the other pairs and their histories stay, and the list
+  /// is not rebuilt. `skip` flags every sphere removed so far, `gone`
+  /// included: the searches leave them out from now on. Call update() (with
+  /// the same `skip`) before anything reads the pairs or grid(): until then
+  /// the list still holds the removed spheres' pairs. x: the positions now
+  /// (their count sizes the flags).
   void remove(std::span<const double> x, std::span<const std::int32_t> gone, std::span<const std::uint8_t> skip);
 
   /// Adds the pairs of links that have just broken (sorted by link index,
@@ -253,6 +256,9 @@ private:
   // the movers of the last search (flag per sphere, cleared by end_search)
   std::vector<std::uint8_t> _moving;
   std::vector<std::int32_t> _movers;
+  // the spheres removed since the last search (flagged in _moving too):
+  // their pairs go at the next merge
+  std::vector<std::int32_t> _dropped;
   // a deferred search's new pairs, sorted by (a, b)
   std::vector<std::int32_t> _pend_a, _pend_b, _pend_link;
   bool _pending = false;
