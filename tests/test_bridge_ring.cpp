@@ -17,6 +17,7 @@
 #include <fstream>
 #include <mpi.h>
 #include <numbers>
+#include <omp.h>
 #include <unistd.h>
 #include <catch2/catch.hpp>
 
@@ -322,6 +323,26 @@ TEST_CASE("Gmsh: a slab's outline with a circular hole, quadrilaterals", "[shell
   bad.size = 0.0;
   CHECK_THROWS_WITH(shell::mesh_outline(MPI_COMM_WORLD, bad, shell::Cell::triangle), Contains("element size 0 m"));
   CHECK_THROWS_WITH(shell::mesh_outline(MPI_COMM_WORLD, o, shell::Cell::hexahedron), Contains("not hexahedron"));
+}
+
+TEST_CASE("Gmsh: meshing leaves the process's OpenMP thread count as it was", "[shell][gmsh]")
+{
+  // Gmsh sets the OpenMP thread count to its own option (1) when it starts
+  // and when it meshes: without the session's restore, a coupled slab's
+  // spheres would step on one thread after their shells were meshed.
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(3);
+  shell::SlabOutline o;
+  o.lx = o.ly = side;
+  o.hole = shell::SlabOutline::Hole::circle;
+  o.centre = centre;
+  o.radius = 0.03;
+  o.size = 0.01;
+  const shell::FEModel fe = shells(shell::mesh_outline(MPI_COMM_WORLD, o, shell::Cell::quadrilateral));
+  const int after = omp_get_max_threads();
+  omp_set_num_threads(before);
+  CHECK(fe.nodes_per_cell() == 4);
+  CHECK(after == 3);
 }
 
 TEST_CASE("Gmsh: a .msh file is read; bad files are refused naming them", "[shell][gmsh]")

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <gmsh.h>
+#include <omp.h>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -22,16 +23,24 @@ namespace
 using core::number_text;
 
 /// Gmsh's global state for one use: initialised quietly, finalised on exit
-/// (exceptions included).
+/// (exceptions included). Gmsh sets the process's OpenMP thread count to its
+/// own option General.NumThreads (1) when it starts and when it meshes; the
+/// session puts back the count it found, or every parallel loop run after
+/// the mesh (the spheres' step of a coupled slab) would run on one thread.
 struct GmshSession
 {
-  GmshSession()
+  GmshSession() : threads(omp_get_max_threads())
   {
     gmsh::initialize(0, nullptr, false);
     gmsh::option::setNumber("General.Terminal", 0);
     gmsh::model::add("dembridge");
   }
-  ~GmshSession() { gmsh::finalize(); }
+  ~GmshSession()
+  {
+    gmsh::finalize();
+    omp_set_num_threads(threads);
+  }
+  int threads;
   GmshSession(const GmshSession&) = delete;
   GmshSession& operator=(const GmshSession&) = delete;
 };
