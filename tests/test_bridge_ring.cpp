@@ -330,7 +330,11 @@ TEST_CASE("Gmsh: meshing leaves the process's OpenMP thread count as it was", "[
   // Gmsh sets the OpenMP thread count to its own option (1) when it starts
   // and when it meshes: without the session's restore, a coupled slab's
   // spheres would step on one thread after their shells were meshed.
-  const int before = omp_get_max_threads();
+  struct Restore // (the count the other tests run with, whatever happens here)
+  {
+    int n = omp_get_max_threads();
+    ~Restore() { omp_set_num_threads(n); }
+  } restore;
   omp_set_num_threads(3);
   shell::SlabOutline o;
   o.lx = o.ly = side;
@@ -340,7 +344,6 @@ TEST_CASE("Gmsh: meshing leaves the process's OpenMP thread count as it was", "[
   o.size = 0.01;
   const shell::FEModel fe = shells(shell::mesh_outline(MPI_COMM_WORLD, o, shell::Cell::quadrilateral));
   const int after = omp_get_max_threads();
-  omp_set_num_threads(before);
   CHECK(fe.nodes_per_cell() == 4);
   CHECK(after == 3);
 }

@@ -586,7 +586,7 @@ void NeighbourList::keep_rolling()
 std::size_t NeighbourList::bytes() const
 {
   return (a.capacity() + b.capacity() + link.capacity() + _pend_a.capacity() + _pend_b.capacity()
-          + _pend_link.capacity() + _movers.capacity())
+          + _pend_link.capacity() + _movers.capacity() + _dropped.capacity())
              * sizeof(std::int32_t)
          + (fs.capacity() + mr.capacity() + n.capacity() + _x_build.capacity() + _x_grid.capacity())
              * sizeof(double)

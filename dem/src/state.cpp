@@ -103,6 +103,8 @@ void NeighbourList::save(const Group& g) const
 {
   if (_pending)
     throw std::logic_error("neighbour list: saved with a deferred search not merged (add_broken_links)");
+  if (!_dropped.empty())
+    throw std::logic_error("neighbour list: saved with removed spheres whose pairs no update() has dropped");
   g.write("a", a);
   g.write("b", b);
   g.write("link", link);
@@ -126,6 +128,12 @@ void NeighbourList::load(const Group& g)
 {
   if (g.read_double("skin") != _skin)
     g.fail("skin", "differs from this run's skin " + std::to_string(_skin) + " m");
+  // nothing of a search or removal in progress survives (a step that threw
+  // between update() and add_broken_links(), then a reload)
+  end_search();
+  _pend_a.clear();
+  _pend_b.clear();
+  _pend_link.clear();
   g.read("a", a);
   g.read("b", b);
   g.read("link", link);

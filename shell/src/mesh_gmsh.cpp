@@ -22,25 +22,29 @@ namespace
 {
 using core::number_text;
 
+/// OpenMP's thread count as found, put back when this goes.
+struct ThreadCount
+{
+  int n = omp_get_max_threads();
+  ~ThreadCount() { omp_set_num_threads(n); }
+};
+
 /// Gmsh's global state for one use: initialised quietly, finalised on exit
 /// (exceptions included). Gmsh sets the process's OpenMP thread count to its
 /// own option General.NumThreads (1) when it starts and when it meshes; the
-/// session puts back the count it found, or every parallel loop run after
-/// the mesh (the spheres' step of a coupled slab) would run on one thread.
+/// session puts back the count it found (its member goes after finalize(),
+/// or alone if the constructor throws), or every parallel loop run after the
+/// mesh (the spheres' step of a coupled slab) would run on one thread.
 struct GmshSession
 {
-  GmshSession() : threads(omp_get_max_threads())
+  GmshSession()
   {
     gmsh::initialize(0, nullptr, false);
     gmsh::option::setNumber("General.Terminal", 0);
     gmsh::model::add("dembridge");
   }
-  ~GmshSession()
-  {
-    gmsh::finalize();
-    omp_set_num_threads(threads);
-  }
-  int threads;
+  ~GmshSession() { gmsh::finalize(); }
+  ThreadCount threads;
   GmshSession(const GmshSession&) = delete;
   GmshSession& operator=(const GmshSession&) = delete;
 };

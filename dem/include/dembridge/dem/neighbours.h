@@ -164,8 +164,7 @@ public:
   std::size_t version() const { return _version; }
   double skin() const { return _skin; }
   /// The cell grid of the last change (null before the first), over the
-  /// positions then (at a removal, over the positions of that moment);
-  /// spheres have moved less than drift() since.
+  /// positions then; spheres have moved less than drift() since.
   const CellGrid* grid() const { return _grid ? &*_grid : nullptr; }
   /// The most a sphere moves from where grid() has it, or between two
   /// changes of the list [m]: twice mover_share x skin.
