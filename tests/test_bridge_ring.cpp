@@ -282,9 +282,10 @@ shell::FEModel shells(std::shared_ptr<dolfinx::mesh::Mesh> mesh)
   sm.thickness = thick;
   return shell::FEModel(mesh, sm);
 }
-} // namespace
 
-TEST_CASE("Gmsh: a slab's outline with a circular hole, quadrilaterals", "[shell][ring][gmsh]")
+/// The test slab's outline with a circular hole of 30 mm about its centre,
+/// elements of 10 mm.
+shell::SlabOutline circle_outline()
 {
   shell::SlabOutline o;
   o.lx = o.ly = side;
@@ -292,6 +293,13 @@ TEST_CASE("Gmsh: a slab's outline with a circular hole, quadrilaterals", "[shell
   o.centre = centre;
   o.radius = 0.03;
   o.size = 0.01;
+  return o;
+}
+} // namespace
+
+TEST_CASE("Gmsh: a slab's outline with a circular hole, quadrilaterals", "[shell][ring][gmsh]")
+{
+  const shell::SlabOutline o = circle_outline();
   const shell::FEModel fe = shells(shell::mesh_outline(MPI_COMM_WORLD, o, shell::Cell::quadrilateral));
   CHECK(fe.nodes_per_cell() == 4);
   // the hole's boundary: a regular polygon of N nodes on the circle (each
@@ -336,13 +344,7 @@ TEST_CASE("Gmsh: meshing leaves the process's OpenMP thread count as it was", "[
     ~Restore() { omp_set_num_threads(n); }
   } restore;
   omp_set_num_threads(3);
-  shell::SlabOutline o;
-  o.lx = o.ly = side;
-  o.hole = shell::SlabOutline::Hole::circle;
-  o.centre = centre;
-  o.radius = 0.03;
-  o.size = 0.01;
-  const shell::FEModel fe = shells(shell::mesh_outline(MPI_COMM_WORLD, o, shell::Cell::quadrilateral));
+  const shell::FEModel fe = shells(shell::mesh_outline(MPI_COMM_WORLD, circle_outline(), shell::Cell::quadrilateral));
   const int after = omp_get_max_threads();
   CHECK(fe.nodes_per_cell() == 4);
   CHECK(after == 3);
