@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 
@@ -161,29 +163,135 @@ struct Found
   double distance = 0.0; ///< to the nearest element, for outside points
 };
 
-/// The element of point pt among cells with bounding boxes `box` (the rules
-/// of the paper's Figure 6, see fictive.h): deepest of those containing it,
-/// else the nearest (reference coordinates clamped) within max_distance.
+using Box = std::array<double, 6>; ///< lower corner (3), upper corner (3)
+
+/// The cells' bounding boxes binned on a uniform grid: the cells whose box
+/// holds a point are among those of the point's bin, in increasing index.
+/// Bins about the size of the mean box, at most 8 per cell.
+class CellBins
+{
+public:
+  explicit CellBins(const std::vector<Box>& box)
+  {
+    const std::size_t nc = box.size();
+    std::array<double, 3> hi{}, mean{};
+    _lo = {1e300, 1e300, 1e300};
+    hi = {-1e300, -1e300, -1e300};
+    for (const auto& b : box)
+      for (int i = 0; i < 3; ++i)
+      {
+        _lo[i] = std::min(_lo[i], b[i]);
+        hi[i] = std::max(hi[i], b[3 + i]);
+        mean[i] += (b[3 + i] - b[i]) / double(nc);
+      }
+    for (int i = 0; i < 3; ++i)
+    {
+      _hi[i] = hi[i];
+      const double span = hi[i] - _lo[i];
+      _n[i] = span > 0.0 && mean[i] > 0.0 ? std::max<std::int64_t>(1, std::int64_t(std::min(span / mean[i], 1e6))) : 1;
+    }
+    while (_n[0] * _n[1] * _n[2] > std::int64_t(8 * nc + 8))
+    {
+      auto& big = *std::max_element(_n.begin(), _n.end());
+      big = (big + 1) / 2;
+    }
+    for (int i = 0; i < 3; ++i)
+      _h[i] = hi[i] > _lo[i] ? (hi[i] - _lo[i]) / double(_n[i]) : 1.0;
+    // CSR: count, then fill in increasing cell index
+    _first.assign(_n[0] * _n[1] * _n[2] + 1, 0);
+    for (int pass = 0; pass < 2; ++pass)
+    {
+      std::vector<std::int64_t> next(_first.begin(), _first.end() - 1);
+      if (pass == 1)
+        _cells.resize(_first.back());
+      for (std::size_t c = 0; c < nc; ++c)
+        for (auto i = bin(0, box[c][0]); i <= bin(0, box[c][3]); ++i)
+          for (auto j = bin(1, box[c][1]); j <= bin(1, box[c][4]); ++j)
+            for (auto k = bin(2, box[c][2]); k <= bin(2, box[c][5]); ++k)
+            {
+              const auto b = (i * _n[1] + j) * _n[2] + k;
+              if (pass == 0)
+                ++_first[b + 1];
+              else
+                _cells[next[b]++] = static_cast<std::int32_t>(c);
+            }
+      if (pass == 0)
+        for (std::size_t b = 1; b < _first.size(); ++b)
+          _first[b] += _first[b - 1];
+    }
+  }
+
+  /// The cells of pt's bin (none if pt lies outside every box).
+  std::span<const std::int32_t> near(const V3& pt) const
+  {
+    for (int i = 0; i < 3; ++i)
+      if (!(pt[i] >= _lo[i] && pt[i] <= _hi[i]))
+        return {};
+    const auto b = (bin(0, pt[0]) * _n[1] + bin(1, pt[1])) * _n[2] + bin(2, pt[2]);
+    return std::span<const std::int32_t>(_cells).subspan(_first[b], _first[b + 1] - _first[b]);
+  }
+
+private:
+  /// Bin of coordinate v along axis i (monotone in v, so that a point in a
+  /// box falls in one of the box's bins).
+  std::int64_t bin(int i, double v) const
+  {
+    return std::clamp<std::int64_t>(std::int64_t(std::floor((v - _lo[i]) / _h[i])), 0, _n[i] - 1);
+  }
+  std::array<double, 3> _lo{}, _hi{}, _h{};
+  std::array<std::int64_t, 3> _n{};
+  std::vector<std::int64_t> _first;
+  std::vector<std::int32_t> _cells;
+};
+
+/// The cells' bounding boxes grown by what a point counted inside with
+/// reference-coordinate tolerance tol can lie beyond them (a map extended
+/// past the reference element by tol moves the point at most a few tol
+/// times the cell's size; the inversion places it to 1e-9 of the size).
+std::vector<Box> holding_boxes(const std::vector<Box>& box, double tol)
+{
+  std::vector<Box> out(box);
+  for (auto& b : out)
+  {
+    const double size = std::max({b[3] - b[0], b[4] - b[1], b[5] - b[2]});
+    const double grow = (16.0 * std::max(tol, 0.0) + 1e-6) * size + 1e-12;
+    for (int i = 0; i < 3; ++i)
+    {
+      b[i] -= grow;
+      b[3 + i] += grow;
+    }
+  }
+  return out;
+}
+
+/// The element of point pt (the rules of the paper's Figure 6, see
+/// fictive.h): deepest of the cells containing it, else the nearest
+/// (reference coordinates clamped) of those whose bounding box `box` lies
+/// within max_distance. `holding`: the cells that can contain pt (CellBins
+/// of holding_boxes), in increasing index, as is the scan of all cells for
+/// the nearest; a point inside no cell is rare (the overlap lies in the
+/// mesh), so that scan costs little.
 /// invert(c, pt, r) -> bool, margin(r) -> double (>= 0 inside),
 /// nearest(c, r) -> {clamped r, its physical point}.
 template <typename Invert, typename Margin, typename Nearest>
-Found find_cell(const V3& pt, const std::vector<std::array<double, 6>>& box, double maxd,
+Found find_cell(const V3& pt, std::span<const std::int32_t> holding, const std::vector<Box>& box, double maxd,
                 double tol, Invert&& invert, Margin&& margin, Nearest&& nearest)
 {
-  Found f;
-  int inside = 0, best_out = -1;
-  double best_margin = -1e300, best_dist = 1e300;
-  V3 ref_out{};
-  for (std::size_t c = 0; c < box.size(); ++c)
+  const auto beyond = [&](std::size_t c)
   {
     const auto& b = box[c];
     double out = 0.0;
     for (int i = 0; i < 3; ++i)
       out = std::max({out, b[i] - pt[i], pt[i] - b[3 + i]});
-    if (out > maxd)
-      continue;
+    return out > maxd;
+  };
+  Found f;
+  int inside = 0;
+  double best_margin = -1e300;
+  for (const std::int32_t c : holding)
+  {
     V3 r;
-    if (!invert(c, pt, r))
+    if (beyond(std::size_t(c)) || !invert(std::size_t(c), pt, r))
       continue;
     const double m = margin(r);
     if (m >= -tol)
@@ -192,19 +300,8 @@ Found find_cell(const V3& pt, const std::vector<std::array<double, 6>>& box, dou
       if (m > best_margin)
       {
         best_margin = m;
-        f.cell = static_cast<int>(c);
+        f.cell = c;
         f.ref = r;
-      }
-    }
-    else if (f.cell < 0)
-    {
-      const auto [rc, y] = nearest(c, r);
-      const double d = std::hypot(y[0] - pt[0], y[1] - pt[1], y[2] - pt[2]);
-      if (d < best_dist)
-      {
-        best_dist = d;
-        best_out = static_cast<int>(c);
-        ref_out = rc;
       }
     }
   }
@@ -212,6 +309,23 @@ Found find_cell(const V3& pt, const std::vector<std::array<double, 6>>& box, dou
   {
     f.ambiguous = inside > 1;
     return f;
+  }
+  int best_out = -1;
+  double best_dist = 1e300;
+  V3 ref_out{};
+  for (std::size_t c = 0; c < box.size(); ++c)
+  {
+    V3 r;
+    if (beyond(c) || !invert(c, pt, r) || margin(r) >= -tol) // (a cell holding pt is among `holding`)
+      continue;
+    const auto [rc, y] = nearest(c, r);
+    const double d = std::hypot(y[0] - pt[0], y[1] - pt[1], y[2] - pt[2]);
+    if (d < best_dist)
+    {
+      best_dist = d;
+      best_out = static_cast<int>(c);
+      ref_out = rc;
+    }
   }
   f.distance = best_dist;
   if (best_out >= 0 && best_dist <= maxd)
@@ -262,7 +376,7 @@ CouplingOperator locate(const ShellGeometry& g, std::span<const double> points,
   const double maxd = opt.max_distance >= 0.0 ? opt.max_distance : g.thickness;
   // elements and their bounding boxes
   std::vector<Element> el(ncell);
-  std::vector<std::array<double, 6>> box(ncell);
+  std::vector<Box> box(ncell);
   for (std::size_t c = 0; c < ncell; ++c)
   {
     el[c].npc = npc;
@@ -286,11 +400,12 @@ CouplingOperator locate(const ShellGeometry& g, std::span<const double> points,
   CouplingOperator op;
   op._npc = npc;
   const double tol = opt.tolerance;
+  const CellBins bins(holding_boxes(box, tol));
   for (std::size_t p = 0; p < np; ++p)
   {
     const V3 x{points[3 * p], points[3 * p + 1], points[3 * p + 2]};
     const Found f = find_cell(
-        x, box, maxd, tol, [&](std::size_t c, const V3& pt, V3& r) { return invert(el[c], pt, r); },
+        x, bins.near(x), box, maxd, tol, [&](std::size_t c, const V3& pt, V3& r) { return invert(el[c], pt, r); },
         [&](const V3& r) { return margin(npc, r); },
         [&](std::size_t c, const V3& r)
         {
@@ -476,7 +591,7 @@ CouplingOperator locate_in_solid(std::span<const double> x, std::span<const std:
   if (npc != 4 && npc != 8)
     throw std::runtime_error("solid coupling needs P1 tetrahedra (4 nodes) or hexahedra (8)");
   const std::size_t ncell = cells.size() / npc, np = points.size() / 3;
-  std::vector<std::array<double, 6>> box(ncell);
+  std::vector<Box> box(ncell);
   double size = 0.0;
   for (std::size_t c = 0; c < ncell; ++c)
   {
@@ -496,6 +611,7 @@ CouplingOperator locate_in_solid(std::span<const double> x, std::span<const std:
   CouplingOperator op;
   op._npc = npc;
   op._bs = 3;
+  const CellBins bins(holding_boxes(box, opt.tolerance));
   for (std::size_t p = 0; p < np; ++p)
   {
     const V3 pt{points[3 * p], points[3 * p + 1], points[3 * p + 2]};
@@ -506,7 +622,7 @@ CouplingOperator locate_in_solid(std::span<const double> x, std::span<const std:
           X[k][i] = x[3 * cells[c * npc + k] + i];
     };
     const Found f = find_cell(
-        pt, box, maxd, opt.tolerance,
+        pt, bins.near(pt), box, maxd, opt.tolerance,
         [&](std::size_t c, const V3& q, V3& r)
         {
           double X[8][3];
