@@ -1,4 +1,5 @@
 #include "dembridge/bridge/coupled.h"
+#include "dembridge/dem/linearised.h"
 
 #include <algorithm>
 #include <array>
@@ -298,9 +299,10 @@ void CoupledSolver::coupled_time_step(const CouplingOptions& o, const dem::Mater
       for (int d = 0; d < 3; ++d)
         mass.push_back(rot ? _p.inertia[i] : _p.m[i]);
   const auto f_fe = _model.bounding_force_fn();
+  dem::StiffnessOperator k_de(_p, _l);
   auto f_all = [&](std::span<const double> z, std::span<double> f) {
     f_fe(z.first(nf), f.first(nf));
-    dem::stiffness_action(_p, _l, z.subspan(nf), f.subspan(nf));
+    k_de.apply(z.subspan(nf), f.subspan(nf));
   };
   // the iteration moves the spheres and the shell: with tied bar nodes its
   // projector ties the spheres only

@@ -253,6 +253,8 @@ std::vector<Box> holding_boxes(const std::vector<Box>& box, double tol)
   std::vector<Box> out(box);
   for (auto& b : out)
   {
+    if (!std::all_of(b.begin(), b.end(), [](double v) { return std::isfinite(v); }))
+      throw std::runtime_error("locating points in the FE mesh: a cell has a node coordinate that is not finite");
     const double size = std::max({b[3] - b[0], b[4] - b[1], b[5] - b[2]});
     const double grow = (16.0 * std::max(tol, 0.0) + 1e-6) * size + 1e-12;
     for (int i = 0; i < 3; ++i)
@@ -560,7 +562,19 @@ bool solid_invert(int npc, const double (*X)[3], const V3& p, V3& r)
     if (std::abs(d[0]) + std::abs(d[1]) + std::abs(d[2]) < 1e-14)
       break;
   }
-  return std::isfinite(r[0]) && std::isfinite(r[1]) && std::isfinite(r[2]);
+  if (!(std::isfinite(r[0]) && std::isfinite(r[1]) && std::isfinite(r[2])))
+    return false;
+  // converged only if the map puts r at p (as the shells' invert): Newton
+  // stopped unconverged could leave r anywhere, also inside the cell
+  double N[8], dN[8][3], x[3] = {0, 0, 0}, size = 0.0;
+  solid_shape(npc, r, N, dN);
+  for (int k = 0; k < npc; ++k)
+    for (int i = 0; i < 3; ++i)
+    {
+      x[i] += N[k] * X[k][i];
+      size = std::max(size, std::abs(X[k][i] - X[0][i]));
+    }
+  return std::hypot(x[0] - p[0], x[1] - p[1], x[2] - p[2]) <= 1e-9 * size;
 }
 
 double solid_margin(int npc, const V3& r)

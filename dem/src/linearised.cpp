@@ -4,6 +4,7 @@
 
 #include "dembridge/dem/bars.h"
 #include "dembridge/dem/body.h"
+#include "dembridge/dem/linearised.h"
 #include "dembridge/core/stepping.h"
 
 #include <algorithm>
@@ -17,48 +18,105 @@ namespace dembridge::dem
 using impl::cross3;
 using impl::dot3;
 
+StiffnessOperator::StiffnessOperator(const Particles& p, const Links& l) : _p(p), _l(l)
+{
+  const std::size_t n = p.size();
+  _first.assign(n + 1, 0);
+  for (std::size_t k = 0; k < l.size(); ++k)
+    if (l.state[k] == LinkState::intact)
+    {
+      ++_first[l.a[k] + 1];
+      ++_first[l.b[k] + 1];
+    }
+  for (std::size_t i = 0; i < n; ++i)
+    _first[i + 1] += _first[i];
+  _links.resize(_first[n]);
+  std::vector<std::int32_t> next(_first.begin(), _first.end() - 1);
+  for (std::size_t k = 0; k < l.size(); ++k)
+    if (l.state[k] == LinkState::intact)
+    {
+      _links[next[l.a[k]]++] = static_cast<std::int32_t>(k);
+      _links[next[l.b[k]]++] = static_cast<std::int32_t>(k);
+    }
+  _out.resize(9 * l.size());
+}
+
+void StiffnessOperator::apply(std::span<const double> u, std::span<double> f)
+{
+  const Particles& p = _p;
+  const Links& l = _l;
+  const std::size_t n = p.size(), nl = l.size();
+  if (u.size() != 6 * n || f.size() != 6 * n)
+    throw std::runtime_error("stiffness_action: u and f need 6 values per particle");
+  if (_out.size() != 9 * nl || _first.size() != n + 1)
+    throw std::runtime_error("stiffness operator: the spheres or links changed since it was built");
+  const double* th = u.data() + 3 * n;
+  double* t = f.data() + 3 * n;
+#pragma omp parallel
+  {
+#pragma omp for schedule(static)
+    for (std::size_t k = 0; k < nl; ++k)
+    {
+      if (l.state[k] != LinkState::intact)
+        continue;
+      const std::int32_t i = l.a[k], j = l.b[k];
+      Vec3 nv{p.x[3 * j] - p.x[3 * i], p.x[3 * j + 1] - p.x[3 * i + 1], p.x[3 * j + 2] - p.x[3 * i + 2]};
+      const double D = std::sqrt(dot3(nv.data(), nv.data()));
+      for (double& c : nv)
+        c /= D;
+      const double la = D * p.r[i] / (p.r[i] + p.r[j]), lb = D - la;
+      const Vec3 rot{la * th[3 * i] + lb * th[3 * j], la * th[3 * i + 1] + lb * th[3 * j + 1],
+                     la * th[3 * i + 2] + lb * th[3 * j + 2]};
+      const Vec3 rxn = cross3(rot.data(), nv.data());
+      Vec3 d;
+      for (int c = 0; c < 3; ++c)
+        d[c] = u[3 * j + c] - u[3 * i + c] - rxn[c];
+      const double dn = dot3(d.data(), nv.data());
+      const double wk = l.weight.empty() ? 1.0 : l.weight[k];
+      const double fn = wk * l.kn[k] * dn; // tension positive
+      Vec3 fs;                              // shear force on b
+      for (int c = 0; c < 3; ++c)
+        fs[c] = -wk * l.ks[k] * (d[c] - dn * nv[c]);
+      const auto tq = shear_torques(nv, fs, la, lb);
+      double* o = _out.data() + 9 * k;
+      for (int c = 0; c < 3; ++c)
+      {
+        // f = K u is the internal force: minus the force the link applies
+        o[c] = -fn * nv[c] + fs[c];
+        o[3 + c] = tq[0][c];
+        o[6 + c] = tq[1][c];
+      }
+    }
+#pragma omp for schedule(static)
+    for (std::size_t s = 0; s < n; ++s)
+    {
+      double fs[3] = {0.0, 0.0, 0.0}, ts[3] = {0.0, 0.0, 0.0};
+      for (auto e = _first[s]; e < _first[s + 1]; ++e)
+      {
+        const std::int32_t k = _links[e];
+        if (l.state[k] != LinkState::intact) // (broken since construction: its slots are stale)
+          continue;
+        const double* o = _out.data() + 9 * k;
+        const bool is_a = l.a[k] == static_cast<std::int32_t>(s);
+        for (int c = 0; c < 3; ++c)
+        {
+          fs[c] = is_a ? fs[c] + o[c] : fs[c] - o[c];
+          ts[c] -= is_a ? o[3 + c] : o[6 + c];
+        }
+      }
+      for (int c = 0; c < 3; ++c)
+      {
+        f[3 * s + c] = fs[c];
+        t[3 * s + c] = ts[c];
+      }
+    }
+  }
+}
+
 void stiffness_action(const Particles& p, const Links& l, std::span<const double> u,
                       std::span<double> f)
 {
-  const std::size_t n = p.size();
-  if (u.size() != 6 * n || f.size() != 6 * n)
-    throw std::runtime_error("stiffness_action: u and f need 6 values per particle");
-  std::fill(f.begin(), f.end(), 0.0);
-  const double* th = u.data() + 3 * n;
-  double* t = f.data() + 3 * n;
-  for (std::size_t k = 0; k < l.size(); ++k)
-  {
-    if (l.state[k] != LinkState::intact)
-      continue;
-    const std::int32_t i = l.a[k], j = l.b[k];
-    Vec3 nv{p.x[3 * j] - p.x[3 * i], p.x[3 * j + 1] - p.x[3 * i + 1], p.x[3 * j + 2] - p.x[3 * i + 2]};
-    const double D = std::sqrt(dot3(nv.data(), nv.data()));
-    for (double& c : nv)
-      c /= D;
-    const double la = D * p.r[i] / (p.r[i] + p.r[j]), lb = D - la;
-    const Vec3 rot{la * th[3 * i] + lb * th[3 * j], la * th[3 * i + 1] + lb * th[3 * j + 1],
-                   la * th[3 * i + 2] + lb * th[3 * j + 2]};
-    const Vec3 rxn = cross3(rot.data(), nv.data());
-    Vec3 d;
-    for (int c = 0; c < 3; ++c)
-      d[c] = u[3 * j + c] - u[3 * i + c] - rxn[c];
-    const double dn = dot3(d.data(), nv.data());
-    const double wk = l.weight.empty() ? 1.0 : l.weight[k];
-    const double fn = wk * l.kn[k] * dn; // tension positive
-    Vec3 fs;                              // shear force on b
-    for (int c = 0; c < 3; ++c)
-      fs[c] = -wk * l.ks[k] * (d[c] - dn * nv[c]);
-    const auto tq = shear_torques(nv, fs, la, lb);
-    for (int c = 0; c < 3; ++c)
-    {
-      // f = K u is the internal force: minus the force the link applies
-      const double fb = -fn * nv[c] + fs[c];
-      f[3 * j + c] -= fb;
-      f[3 * i + c] += fb;
-      t[3 * i + c] -= tq[0][c];
-      t[3 * j + c] -= tq[1][c];
-    }
-  }
+  StiffnessOperator(p, l).apply(u, f);
 }
 
 namespace
@@ -198,7 +256,8 @@ double particle_critical_time_step(const Particles& p, const Links& l, double rt
       mass[3 * i + d] = p.m[i];
       mass[3 * n + 3 * i + d] = p.inertia[i];
     }
-  auto f = [&](std::span<const double> z, std::span<double> out) { stiffness_action(p, l, z, out); };
+  StiffnessOperator k(p, l);
+  auto f = [&](std::span<const double> z, std::span<double> out) { k.apply(z, out); };
   const double lmax = core::max_eigenvalue(mass, f, rtol, 20000);
   if (!(lmax > 0.0))
     throw std::runtime_error("critical time step: the assembly has no intact link");
