@@ -504,26 +504,46 @@ TEST_CASE("undamped elastic assembly: no energy drift over 10,000 steps", "[dem]
   CHECK(a.deviation / b.deviation < 4.8);
 }
 
+namespace
+{
+/// A lattice of n^3 spheres, its links weighted 0.25, 0.5 and 0.75 in turn
+/// (the weights reach both paths of the linearised stiffness), and a small
+/// motion u of it: displacements up to 1e-9 m, rotations up to 1e-6 rad.
+struct SmallMotion
+{
+  Particles p;
+  Links l;
+  std::vector<double> u;
+};
+SmallMotion small_motion(int n, unsigned seed)
+{
+  SmallMotion s{lattice(n), {}, {}};
+  s.l = create_links(s.p, 1.4, concrete());
+  s.l.weight.assign(s.l.size(), 0.0);
+  for (std::size_t k = 0; k < s.l.size(); ++k)
+    s.l.weight[k] = 0.25 + 0.5 * (k % 3) / 2.0;
+  const std::size_t np = s.p.size();
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> d(-1e-9, 1e-9), w(-1e-6, 1e-6);
+  s.u.resize(6 * np);
+  for (std::size_t i = 0; i < 3 * np; ++i)
+  {
+    s.u[i] = d(gen);
+    s.u[3 * np + i] = w(gen);
+  }
+  return s;
+}
+} // namespace
+
 TEST_CASE("linearised stiffness action matches the force loop for small increments", "[dem]")
 {
   // Displacements of 1e-9 m (1e-6 of a radius) and rotations of 1e-6 rad:
   // the force loop's geometric nonlinearity (change of the normal, finite
   // rotations) differs from K u by terms of relative order 1e-6.
-  auto p = lattice(4);
   const Material m = concrete();
-  auto l = create_links(p, 1.4, m);
-  l.weight.assign(l.size(), 0.0);
-  for (std::size_t k = 0; k < l.size(); ++k)
-    l.weight[k] = 0.25 + 0.5 * (k % 3) / 2.0; // weights reach both paths
+  auto [p, l, u] = small_motion(4, 11);
   const std::size_t n = p.size();
-  std::mt19937 gen(11);
-  std::uniform_real_distribution<double> d(-1e-9, 1e-9), w(-1e-6, 1e-6);
-  std::vector<double> u(6 * n), ku(6 * n);
-  for (std::size_t i = 0; i < 3 * n; ++i)
-  {
-    u[i] = d(gen);
-    u[3 * n + i] = w(gen);
-  }
+  std::vector<double> ku(6 * n);
   stiffness_action(p, l, u, ku);
   const double dt = 1e-7;
   for (std::size_t i = 0; i < 3 * n; ++i)
@@ -554,23 +574,10 @@ TEST_CASE("linearised stiffness: the same bits on any thread count, some links b
   // StiffnessOperator sums each sphere's links in link order whatever the
   // threads: f on 2 and 3 threads is f on 1 to the last bit; a broken link
   // adds nothing (K u drops by its own term only, checked on one link).
-  auto p = lattice(5);
-  const Material m = concrete();
-  auto l = create_links(p, 1.4, m);
-  l.weight.assign(l.size(), 0.0);
-  for (std::size_t k = 0; k < l.size(); ++k)
-    l.weight[k] = 0.25 + 0.5 * (k % 3) / 2.0;
+  auto [p, l, u] = small_motion(5, 3);
   for (std::size_t k = 0; k < l.size(); k += 7)
     l.state[k] = LinkState::broken_tension;
   const std::size_t n = p.size();
-  std::mt19937 gen(3);
-  std::uniform_real_distribution<double> d(-1e-9, 1e-9), w(-1e-6, 1e-6);
-  std::vector<double> u(6 * n);
-  for (std::size_t i = 0; i < 3 * n; ++i)
-  {
-    u[i] = d(gen);
-    u[3 * n + i] = w(gen);
-  }
   auto action = [&](int threads)
   {
     Team team(threads);
