@@ -174,20 +174,19 @@ public:
   explicit CellBins(const std::vector<Box>& box)
   {
     const std::size_t nc = box.size();
-    std::array<double, 3> hi{}, mean{};
+    std::array<double, 3> mean{};
     _lo = {1e300, 1e300, 1e300};
-    hi = {-1e300, -1e300, -1e300};
+    _hi = {-1e300, -1e300, -1e300};
     for (const auto& b : box)
       for (int i = 0; i < 3; ++i)
       {
         _lo[i] = std::min(_lo[i], b[i]);
-        hi[i] = std::max(hi[i], b[3 + i]);
+        _hi[i] = std::max(_hi[i], b[3 + i]);
         mean[i] += (b[3 + i] - b[i]) / double(nc);
       }
     for (int i = 0; i < 3; ++i)
     {
-      _hi[i] = hi[i];
-      const double span = hi[i] - _lo[i];
+      const double span = _hi[i] - _lo[i];
       _n[i] = span > 0.0 && mean[i] > 0.0 ? std::max<std::int64_t>(1, std::int64_t(std::min(span / mean[i], 1e6))) : 1;
     }
     while (_n[0] * _n[1] * _n[2] > std::int64_t(8 * nc + 8))
@@ -196,29 +195,17 @@ public:
       big = (big + 1) / 2;
     }
     for (int i = 0; i < 3; ++i)
-      _h[i] = hi[i] > _lo[i] ? (hi[i] - _lo[i]) / double(_n[i]) : 1.0;
+      _h[i] = _hi[i] > _lo[i] ? (_hi[i] - _lo[i]) / double(_n[i]) : 1.0;
     // CSR: count, then fill in increasing cell index
     _first.assign(_n[0] * _n[1] * _n[2] + 1, 0);
-    for (int pass = 0; pass < 2; ++pass)
-    {
-      std::vector<std::int64_t> next(_first.begin(), _first.end() - 1);
-      if (pass == 1)
-        _cells.resize(_first.back());
-      for (std::size_t c = 0; c < nc; ++c)
-        for (auto i = bin(0, box[c][0]); i <= bin(0, box[c][3]); ++i)
-          for (auto j = bin(1, box[c][1]); j <= bin(1, box[c][4]); ++j)
-            for (auto k = bin(2, box[c][2]); k <= bin(2, box[c][5]); ++k)
-            {
-              const auto b = (i * _n[1] + j) * _n[2] + k;
-              if (pass == 0)
-                ++_first[b + 1];
-              else
-                _cells[next[b]++] = static_cast<std::int32_t>(c);
-            }
-      if (pass == 0)
-        for (std::size_t b = 1; b < _first.size(); ++b)
-          _first[b] += _first[b - 1];
-    }
+    for (const auto& b : box)
+      each_bin(b, [&](std::int64_t k) { ++_first[k + 1]; });
+    for (std::size_t k = 1; k < _first.size(); ++k)
+      _first[k] += _first[k - 1];
+    _cells.resize(_first.back());
+    std::vector<std::int64_t> next(_first.begin(), _first.end() - 1);
+    for (std::size_t c = 0; c < nc; ++c)
+      each_bin(box[c], [&](std::int64_t k) { _cells[next[k]++] = static_cast<std::int32_t>(c); });
   }
 
   /// The cells of pt's bin (none if pt lies outside every box).
@@ -237,6 +224,15 @@ private:
   std::int64_t bin(int i, double v) const
   {
     return std::clamp<std::int64_t>(std::int64_t(std::floor((v - _lo[i]) / _h[i])), 0, _n[i] - 1);
+  }
+  /// f(k) for each bin k that box b meets.
+  template <typename F>
+  void each_bin(const Box& b, F&& f) const
+  {
+    for (auto i = bin(0, b[0]); i <= bin(0, b[3]); ++i)
+      for (auto j = bin(1, b[1]); j <= bin(1, b[4]); ++j)
+        for (auto k = bin(2, b[2]); k <= bin(2, b[5]); ++k)
+          f((i * _n[1] + j) * _n[2] + k);
   }
   std::array<double, 3> _lo{}, _hi{}, _h{};
   std::array<std::int64_t, 3> _n{};
